@@ -1,0 +1,41 @@
+# CAvatar Edge. Two commands on a fresh machine: `make run` and `make test`.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+PIP := $(PY) -m pip --disable-pip-version-check -q
+# One BLAS thread: on a 2-core board two threads made small numpy products ~10x slower.
+export OMP_NUM_THREADS ?= 1
+export OPENBLAS_NUM_THREADS ?= 1
+
+.PHONY: run test venv test-deps bench clean help
+
+help:
+	@echo "make run    create $(VENV), install, run the main job on the virtual carpet"
+	@echo "make test   install what the tests need, then run the whole suite"
+	@echo "make bench  run the benchmarks in bench/ and write their JSON results"
+
+$(VENV)/.runtime: setup.cfg pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PIP) install -e .
+	touch $@
+
+venv: $(VENV)/.runtime
+
+$(VENV)/.test: $(VENV)/.runtime
+	$(PIP) install -e '.[test,export]'
+	touch $@
+
+test-deps: $(VENV)/.test
+
+run: venv
+	$(VENV)/bin/cavatar stream --source 'sim://?people=2&seed=7' --seconds 10
+
+test: test-deps
+	$(PY) -m pytest -q
+
+bench: test-deps
+	$(PY) bench/decoder_throughput.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,1 @@
+"""The export stage (PyTorch): training, evaluation, ONNX export and quantization. Never on the board."""

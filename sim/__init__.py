@@ -1,0 +1,1 @@
+"""The synthetic carpet: motions, contact physics and the sensor model."""
