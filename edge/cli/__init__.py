@@ -21,6 +21,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.record",
     "edge.cli.inspect",
     "edge.cli.stream",
+    "edge.cli.peripherals",
 ]
 
 EPILOG = """\

@@ -1,0 +1,330 @@
+"""A carpet source: link → handshake → decoder → frame assembly, on its own reader thread.
+
+The reader thread reads the link continuously (so no OS buffer grows and latency stays
+at one frame) and puts whole frames in a bounded queue. When the consumer falls behind
+on a live link, the oldest frame is dropped (``dropped_slow_consumer``): we always hand
+out the newest data. A recording is never dropped from; the reader waits instead, and
+paces frames by their device timestamps when ``speed`` > 0.
+
+On a live link that is lost (unplug, reset), the reader closes it and reopens it with
+back-off (0.1 s doubling to 0.5 s), repeats the handshake and resumes — no restart.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from collections import Counter
+from typing import Any, BinaryIO, Iterator
+
+from edge.frames import FrameAssembler, RawFrame
+from edge.sources.base import Link, LinkEnded, LinkLost, SourceError
+from edge.wiring import WiringMap
+from firmware_protocol import codec
+
+log = logging.getLogger(__name__)
+
+_END = object()  # queue sentinel: the source has ended
+
+
+class CommandRefused(SourceError):
+    """The board answered a command with NAK."""
+
+
+class CarpetSource:
+    """Frames from a readout board. Use as a context manager, then iterate :meth:`frames`."""
+
+    def __init__(
+        self,
+        link: Link,
+        *,
+        wiring: dict[str, Any] | None = None,
+        missing_rows: str = "drop",
+        queue_frames: int = 4,
+        speed: float = 1.0,
+        handshake_timeout_s: float = 3.0,
+        stall_timeout_s: float = 2.0,
+        record_to: BinaryIO | None = None,
+    ) -> None:
+        self.link = link
+        self.wiring_config = wiring
+        self.missing_rows = missing_rows
+        self.speed = speed
+        self.handshake_timeout_s = handshake_timeout_s
+        self.stall_timeout_s = stall_timeout_s
+        self.record_to = record_to
+        self.decoder = codec.StreamDecoder("device_to_host")
+        self.counters: Counter = Counter()
+        self.info: Any = None
+        self.last_status: Any = None
+        self.assembler: FrameAssembler | None = None
+        self._queue: queue.Queue = queue.Queue(maxsize=max(1, queue_frames))
+        self._replies: queue.Queue = queue.Queue()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._cmd_seq = 0
+        self._write_lock = threading.Lock()
+        self._pending: list[Any] = []  # packets read during the handshake, after INFO
+        self._t0_host: float | None = None
+        self.error: BaseException | None = None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def __enter__(self) -> "CarpetSource":
+        self.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.stop()
+
+    def start(self) -> None:
+        """Open the link, learn who the board is, start streaming and the reader thread."""
+        self.link.open()
+        try:
+            self._handshake()
+        except BaseException:
+            self.link.close()
+            raise
+        self._thread = threading.Thread(target=self._run, name=f"source-{self.link.describe()}", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+        if self.link.writable:
+            try:
+                self._send("STOP")
+            except (LinkLost, OSError):
+                pass
+        self.link.close()
+
+    # ------------------------------------------------------------------ consuming
+
+    def frames(self, timeout_s: float | None = None) -> Iterator[RawFrame]:
+        """Yield frames until the source ends or stops; ``timeout_s`` bounds the wait for each."""
+        while not self._stop.is_set() or not self._queue.empty():
+            try:
+                item = self._queue.get(timeout=0.1 if timeout_s is None else timeout_s)
+            except queue.Empty:
+                if timeout_s is not None:
+                    return
+                continue
+            if item is _END:
+                if self.error is not None:
+                    raise self.error
+                return
+            yield item
+
+    def read_frame(self, timeout_s: float = 1.0) -> RawFrame | None:
+        """The next frame, or None when none came within ``timeout_s`` or the source ended."""
+        for frame in self.frames(timeout_s=timeout_s):
+            return frame
+        return None
+
+    def command(self, name: str, timeout_s: float = 1.0, **fields: Any) -> Any:
+        """Send a command and wait for its ACK (returned) or NAK (CommandRefused)."""
+        seq = self._send(name, **fields)
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            try:
+                reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                break
+            if reply.cmd_seq != seq:
+                continue
+            if isinstance(reply, codec.Nak):
+                reason = codec.NAK_REASON_NAMES.get(reply.reason, reply.reason)
+                raise CommandRefused(f"the board refused {name} {fields or ''}: {reason}")
+            return reply
+        raise SourceError(f"no answer to {name} within {timeout_s} s")
+
+    def stats(self) -> dict[str, Any]:
+        """Counters of every stage: decoder drops, assembly, link events, queue."""
+        out = {"decoder": self.decoder.stats.as_dict(), "source": dict(self.counters)}
+        if self.assembler is not None:
+            out["frames"] = dict(self.assembler.counters)
+        if self.last_status is not None:
+            out["board_status"] = {f.name: getattr(self.last_status, f.name) for f in self.last_status.DEF.fields}
+        return out
+
+    # ------------------------------------------------------------------ internals
+
+    def _send(self, name: str, **fields: Any) -> int:
+        if not self.link.writable:
+            raise SourceError(f"{self.link.describe()} cannot carry commands")
+        with self._write_lock:
+            self._cmd_seq = (self._cmd_seq + 1) & 0xFFFF
+            self.link.write(codec.encode_command(name, self._cmd_seq, **fields))
+            return self._cmd_seq
+
+    def _read(self, timeout_s: float) -> bytes:
+        data = self.link.read(timeout_s)
+        if data and self.record_to is not None:
+            self.record_to.write(data)
+        return data
+
+    def _handshake(self) -> None:
+        """GET_INFO until INFO arrives (or find INFO in a recording); check it; START."""
+        deadline = time.monotonic() + self.handshake_timeout_s
+        next_ask = 0.0
+        self._pending = []
+        info = None
+        while info is None:
+            now = time.monotonic()
+            if now > deadline:
+                raise SourceError(self._no_info_message())
+            if self.link.writable and now >= next_ask:
+                self._send("GET_INFO")
+                next_ask = now + 0.5
+            try:
+                data = self._read(0.05)
+            except LinkEnded:
+                raise SourceError(f"{self.link.describe()}: no INFO packet in the data; is it a capture written by `cavatar record`?") from None
+            for pkt in self.decoder.feed(data):
+                if info is None and isinstance(pkt, (codec.Info, codec.ForeignInfo)):
+                    codec.check_compatible(pkt)
+                    info = pkt
+                elif info is not None:
+                    self._pending.append(pkt)
+        self._adopt_info(info)
+        if self.link.writable:
+            self._send("START")
+        self.counters["handshakes"] += 1
+
+    def _no_info_message(self) -> str:
+        st = self.decoder.stats
+        where = self.link.describe()
+        if st.bytes_in == 0:
+            return f"{where}: no bytes from the board within {self.handshake_timeout_s} s; is it powered and running carpet firmware?"
+        if st.dropped.get("bad_crc", 0) >= 3 and st.packets == 0:
+            return (
+                f"{where}: {st.dropped['bad_crc']} well-framed packets failed their CRC and none passed: the board likely "
+                f"speaks another protocol definition (ours: v{codec.PROTOCOL_VERSION}, 0x{codec.DEFINITION_HASH:04X}); "
+                "update the firmware or the host"
+            )
+        return f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s (wrong baud rate or not a carpet board?)"
+
+    def _adopt_info(self, info: Any) -> None:
+        if self.info is not None and (info.rows, info.cols) != (self.info.rows, self.info.cols):
+            raise SourceError(f"the board now reports {info.rows}×{info.cols}, it was {self.info.rows}×{self.info.cols}; restart to adopt it")
+        first = self.info is None
+        self.info = info
+        if first:
+            wiring = WiringMap.from_config(self.wiring_config, info.rows, info.cols)
+            self.assembler = FrameAssembler(info, wiring, missing_rows=self.missing_rows)
+        else:
+            self.assembler.reset()
+
+    def _run(self) -> None:
+        try:
+            for pkt in self._pending:
+                self._dispatch(pkt)
+            self._pending = []
+            last_frame = time.monotonic()
+            while not self._stop.is_set():
+                try:
+                    data = self._read(0.05)
+                except LinkLost as exc:
+                    self._reconnect(exc)
+                    last_frame = time.monotonic()
+                    continue
+                for pkt in self.decoder.feed(data):
+                    if self._dispatch(pkt):
+                        last_frame = time.monotonic()
+                if self.link.paced and time.monotonic() - last_frame > self.stall_timeout_s:
+                    self.counters["stalls"] += 1
+                    log.warning("%s: no frame for %.1f s; asking the board to start again", self.link.describe(), self.stall_timeout_s)
+                    try:
+                        self._send("START")
+                    except (LinkLost, OSError):
+                        pass
+                    last_frame = time.monotonic()
+        except LinkEnded:
+            pass
+        except BaseException as exc:  # surfaced to the consumer by frames()
+            log.error("%s: reader stopped: %s", self.link.describe(), exc)
+            self.error = exc
+        finally:
+            self._put(_END, block=True)
+
+    def _dispatch(self, pkt: Any) -> bool:
+        """Handle one packet; True when it completed a frame."""
+        if isinstance(pkt, (codec.Info, codec.ForeignInfo)):
+            codec.check_compatible(pkt)
+            self._adopt_info(pkt)
+            return False
+        if isinstance(pkt, codec.Status):
+            self.last_status = pkt
+            return False
+        if isinstance(pkt, (codec.Ack, codec.Nak)):
+            self._replies.put(pkt)
+            return False
+        frames = self.assembler.push(pkt)
+        for frame in frames:
+            self._pace(frame)
+            self._put(frame, block=not self.link.paced)
+        return bool(frames)
+
+    def _pace(self, frame: RawFrame) -> None:
+        if self.link.paced or self.speed <= 0:
+            return
+        now = time.monotonic()
+        if self._t0_host is None:
+            self._t0_host = now - frame.t_s / self.speed
+        wait = self._t0_host + frame.t_s / self.speed - now
+        if wait > 0:
+            self._stop.wait(min(wait, 5.0))
+
+    def _put(self, item: Any, block: bool) -> None:
+        if block:
+            while not self._stop.is_set() or item is _END:
+                try:
+                    self._queue.put(item, timeout=0.1)
+                    return
+                except queue.Full:
+                    if item is _END:  # make room: the consumer may be gone
+                        try:
+                            self._queue.get_nowait()
+                        except queue.Empty:
+                            pass
+            return
+        while True:
+            try:
+                self._queue.put_nowait(item)
+                return
+            except queue.Full:
+                try:
+                    self._queue.get_nowait()
+                    self.counters["dropped_slow_consumer"] += 1
+                except queue.Empty:
+                    pass
+
+    def _reconnect(self, why: BaseException) -> None:
+        self.counters["disconnects"] += 1
+        log.warning("%s: link lost (%s); reconnecting", self.link.describe(), why)
+        self.link.close()
+        if not self.link.reconnectable:
+            raise SourceError(f"{self.link.describe()}: link lost ({why})")
+        self.decoder.reset()
+        if self.assembler is not None:
+            self.assembler.reset()
+        delay = 0.1
+        while not self._stop.is_set():
+            try:
+                self.link.open()
+                self._handshake()
+            except (LinkLost, SourceError, OSError) as exc:
+                self.link.close()
+                log.debug("reconnect failed: %s", exc)
+                self._stop.wait(delay)
+                delay = min(delay * 2, 0.5)
+                continue
+            for pkt in self._pending:
+                self._dispatch(pkt)
+            self._pending = []
+            self.counters["reconnects"] += 1
+            log.warning("%s: reconnected", self.link.describe())
+            return

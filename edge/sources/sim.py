@@ -1,0 +1,124 @@
+"""``sim://?people=2&seed=7`` — the virtual carpet, in-process, through the real protocol.
+
+A :class:`~firmware_protocol.virtual_board.VirtualBoard` scans frames from the
+simulator and speaks the wire protocol; this link hands its bytes to the same decoder
+and frame assembly as a real board, so the demo exercises the whole path.
+``speed=0`` runs as fast as frames can be made (a virtual clock), ``speed=1`` in real time.
+"""
+
+from __future__ import annotations
+
+import time
+
+from edge.sources.base import Link, LinkLost, Option, parse_bool, parse_url
+from firmware_protocol import codec
+
+SCHEME = "sim"
+FORM = "sim://?people=2&seed=7&grid=96&rate=14&bits=12&speed=1"
+
+
+def _grid(text: str) -> int:
+    value = int(text)
+    if not 4 <= value <= 512:
+        raise ValueError("grid must be 4..512 sensels per side")
+    return value
+
+
+def _people(text: str) -> int:
+    value = int(text)
+    if not 0 <= value <= 3:
+        raise ValueError("people must be 0..3")
+    return value
+
+
+def _bits(text: str) -> int:
+    value = int(text)
+    if value not in (8, 10, 12, 16):
+        raise ValueError("bits must be 8, 10, 12 or 16")
+    return value
+
+
+OPTIONS = {
+    "people": Option(_people, 1, "people walking on the carpet, 0..3"),
+    "seed": Option(int, 0, "random seed of the scene and the sensor"),
+    "grid": Option(_grid, 96, "sensels per side"),
+    "pitch_mm": Option(float, 19.05, "sensel pitch in millimetres"),
+    "rate": Option(float, 14.0, "frame rate in Hz"),
+    "bits": Option(_bits, 12, "ADC bits per sample: 8, 10, 12 or 16"),
+    "speed": Option(float, 1.0, "1 = real time, 0 = as fast as possible"),
+    "faults": Option(parse_bool, False, "inject line noise now and then (bit flips, garbage, torn frames)"),
+}
+
+
+def packing_for(bits: int) -> int:
+    return codec.PACKING["u8"] if bits <= 8 else codec.PACKING["packed12"] if bits <= 12 else codec.PACKING["u16"]
+
+
+class SimLink(Link):
+    def __init__(self, **opts) -> None:
+        self.opts = opts
+        self.board = None
+        self._t0 = 0.0
+        self._virtual_now = 0.0
+
+    def describe(self) -> str:
+        return "sim://"
+
+    def open(self) -> None:
+        from firmware_protocol.virtual_board import VirtualBoard
+        from sim.footsteps import FootstepCarpet
+
+        o = self.opts
+        carpet = FootstepCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"])
+        tiles = 3 if o["grid"] % 3 == 0 else 1
+        self.board = VirtualBoard(
+            rows=o["grid"], cols=o["grid"], tile_rows=tiles, tile_cols=tiles, adc_bits=o["bits"],
+            packing=packing_for(o["bits"]), sign=-1, rate_hz=o["rate"], device_id=f"sim-{o['seed']}", frames=carpet,
+        )
+        self._t0 = time.monotonic()
+        self._virtual_now = 0.0
+        self._faults_at = 0
+
+    def _now(self) -> float:
+        if self.opts["speed"] <= 0:
+            return self._virtual_now
+        return (time.monotonic() - self._t0) * self.opts["speed"]
+
+    def read(self, timeout_s: float) -> bytes:
+        if self.board is None:
+            raise LinkLost("closed")
+        if self.opts["speed"] <= 0:
+            self._virtual_now += 1.0 / self.opts["rate"]
+            return self._maybe_fault(self.board.read(self._virtual_now))
+        deadline = time.monotonic() + timeout_s
+        while True:
+            data = self.board.read(self._now())
+            if data or time.monotonic() >= deadline:
+                return self._maybe_fault(data)
+            time.sleep(min(0.005, max(0.0, deadline - time.monotonic())))
+
+    def _maybe_fault(self, data: bytes) -> bytes:
+        if self.opts["faults"] and data:
+            self._faults_at += 1
+            if self._faults_at % 37 == 0:
+                self.board.flip_bits(3)
+            elif self._faults_at % 53 == 0:
+                self.board.garbage(40)
+            elif self._faults_at % 97 == 0:
+                self.board.tear_next_frame()
+        return data
+
+    def write(self, data: bytes) -> None:
+        if self.board is None:
+            raise LinkLost("closed")
+        self.board.receive(data)
+
+    def close(self) -> None:
+        self.board = None
+
+
+def open_link(url: str, **_: object) -> SimLink:
+    _, opts = parse_url(url, SCHEME, FORM, OPTIONS)
+    if opts["rate"] <= 0:
+        raise ValueError(f"sim:// rate must be > 0. Form: {FORM}")
+    return SimLink(**opts)
