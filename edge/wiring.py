@@ -13,8 +13,8 @@ Configuration keys (all optional; unknown keys are a ValueError listing these):
 - ``swap_odd_even_rows`` / ``swap_odd_even_cols`` (bool): exchange lines 2k and 2k+1.
 - ``tiles``: a list of tiles, each ``{wire = [r0, c0], carpet = [r0, c0], size = [h, w],
   rot90 = k, flip_cols = bool}``: the h×w block at wire (r0, c0), rotated k quarter turns
-  counter-clockwise then mirrored if asked, lands at carpet (r0, c0). Tiles must cover
-  the carpet exactly once.
+  counter-clockwise then mirrored if asked, lands at carpet (r0, c0). Tiles must use
+  every wire sample once and leave no hole; the carpet's shape is their extent.
 
 The line operations apply in the order listed, after the tiles.
 """
@@ -32,7 +32,7 @@ TILE_KEYS = ("wire", "carpet", "size", "rot90", "flip_cols")
 
 def _swap_pairs(n: int) -> np.ndarray:
     idx = np.arange(n)
-    even = idx[: n - n % 2 : 2]
+    even = np.arange(0, n - n % 2, 2)
     idx[even], idx[even + 1] = even + 1, even
     return idx
 
@@ -82,7 +82,7 @@ class WiringMap:
 
 
 def _place_tiles(grid: np.ndarray, tiles: list[dict[str, Any]]) -> np.ndarray:
-    out = np.full(grid.shape, -1, dtype=np.int64)
+    placed = []
     for i, tile in enumerate(tiles):
         unknown = sorted(set(tile) - set(TILE_KEYS))
         if unknown:
@@ -91,18 +91,25 @@ def _place_tiles(grid: np.ndarray, tiles: list[dict[str, Any]]) -> np.ndarray:
             (wr, wc), (cr, cc), (h, w) = tile["wire"], tile["carpet"], tile["size"]
         except (KeyError, TypeError, ValueError):
             raise ValueError(f"wiring.tiles[{i}] needs wire = [r, c], carpet = [r, c], size = [h, w]") from None
-        block = grid[wr : wr + h, wc : wc + w]
+        block = grid[wr : wr + h, wc : wc + w] if wr >= 0 and wc >= 0 else grid[:0, :0]
         if block.shape != (h, w):
-            raise ValueError(f"wiring.tiles[{i}]: wire block at {[wr, wc]} of size {[h, w]} leaves the {grid.shape} grid")
+            raise ValueError(f"wiring.tiles[{i}]: wire block at {[wr, wc]} of size {[h, w]} leaves the {grid.shape} wire grid")
+        if cr < 0 or cc < 0:
+            raise ValueError(f"wiring.tiles[{i}]: carpet position {[cr, cc]} is negative")
         block = np.rot90(block, int(tile.get("rot90", 0)))
         if tile.get("flip_cols"):
             block = block[:, ::-1]
+        placed.append((i, cr, cc, block))
+    height = max(cr + b.shape[0] for _, cr, _, b in placed)
+    width = max(cc + b.shape[1] for _, _, cc, b in placed)
+    out = np.full((height, width), -1, dtype=np.int64)
+    for i, cr, cc, block in placed:
         bh, bw = block.shape
-        if cr + bh > out.shape[0] or cc + bw > out.shape[1] or cr < 0 or cc < 0:
-            raise ValueError(f"wiring.tiles[{i}]: carpet position {[cr, cc]} of size {[bh, bw]} leaves the carpet")
         if (out[cr : cr + bh, cc : cc + bw] >= 0).any():
             raise ValueError(f"wiring.tiles[{i}] overlaps another tile on the carpet")
         out[cr : cr + bh, cc : cc + bw] = block
     if (out < 0).any():
-        raise ValueError(f"wiring.tiles leave {(out < 0).sum()} carpet sensels uncovered")
+        raise ValueError(f"wiring.tiles leave {(out < 0).sum()} of the {height}×{width} carpet sensels uncovered")
+    if out.size != grid.size:
+        raise ValueError(f"wiring.tiles use {out.size} of the {grid.size} wire samples; every sample must land once")
     return out
