@@ -57,5 +57,15 @@ def run(args: argparse.Namespace) -> int:
         source.stop()
     if frame is None:
         raise CliError(f"no frame arrived from {args.source}")
-    print(f"{n_total} frames in {time.monotonic() - start:.1f} s; counters: {source.stats()}")
+    elapsed = time.monotonic() - start
+    st = source.stats()
+    dec, fr = st["decoder"], st.get("frames", {})
+    print(f"{n_total} frames in {elapsed:.1f} s ({n_total / elapsed:.1f} fps)")
+    print(f"  decoder: {dec['packets']} packets, {dec['bytes_in']} bytes, dropped {dec['dropped'] or 0}, missed {dec['missed']}")
+    print(f"  frames: torn {fr.get('torn_dropped', 0)}, crc mismatch {fr.get('crc_mismatch', 0)}, "
+          f"missed {fr.get('missed_frames', 0)}, duplicate {fr.get('duplicate_frames', 0)}")
+    board = st.get("board_status")
+    if board:
+        temp = "none" if board["temperature_cdeg"] == -32768 else f"{board['temperature_cdeg'] / 100:.1f} °C"
+        print(f"  board: scanned {board['frames_scanned']}, dropped {board['frames_dropped']}, temperature {temp}")
     return 0
