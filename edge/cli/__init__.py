@@ -22,6 +22,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.inspect",
     "edge.cli.stream",
     "edge.cli.peripherals",
+    "edge.cli.render",
 ]
 
 EPILOG = """\
