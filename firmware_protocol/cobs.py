@@ -33,7 +33,7 @@ def decode(encoded: bytes) -> bytes | None:
     if n == 0:
         return None
     first = encoded[0]
-    if first == n and first != 0xFF:  # fast path: a packet with no zero bytes
+    if first == n and first != 0xFF and 0 not in encoded:  # fast path: a packet with no zero bytes
         return bytes(encoded[1:])
     out = bytearray()
     i = 0

@@ -65,7 +65,7 @@ def _packet_class(pdef: _spec.PacketDef) -> type:
         names,
         frozen=True,
         slots=True,
-        namespace={"NAME": pdef.name, "TYPE": pdef.id, "DEF": pdef, "__module__": __name__},
+        namespace={"NAME": pdef.name, "TYPE": pdef.id, "DEF": pdef, "STRUCT": pdef.struct, "__module__": __name__},
     )
     cls.__doc__ = f"{pdef.name} (0x{pdef.id:02X}, {pdef.direction.replace('_', ' ')}): {pdef.doc}"
     return cls
@@ -73,6 +73,7 @@ def _packet_class(pdef: _spec.PacketDef) -> type:
 
 PACKET_CLASSES: dict[str, type] = {p.name: _packet_class(p) for p in SPEC.packets}
 _BY_ID: dict[int, type] = {cls.TYPE: cls for cls in PACKET_CLASSES.values()}
+_SEED: dict[int, int] = {cls.TYPE: SPEC.seed_for(cls.DEF) for cls in PACKET_CLASSES.values()}  # CRC seed by id
 
 Info = PACKET_CLASSES["INFO"]
 Row = PACKET_CLASSES["ROW"]
@@ -178,6 +179,8 @@ def pack(packet: Any) -> bytes:
         if f.type == "char16":
             v = values[i]
             values[i] = v.encode("ascii") if isinstance(v, str) else bytes(v)
+            if len(values[i]) > 16:  # struct's "16s" would cut it short silently
+                raise ValueError(f"{pdef.name}: {f.name} is {len(values[i])} bytes; at most 16 fit")
     try:
         body = pdef.struct.pack(pdef.id, packet.seq & 0xFFFF, *values)
     except struct.error as exc:
@@ -242,7 +245,8 @@ class StreamDecoder:
         self._buf = bytearray()
         self._discarding = False  # inside an over-long chunk: skip to the next delimiter
         self._last_seq: int | None = None
-        self._max_encoded = SPEC.max_packet_bytes + SPEC.max_packet_bytes // 254 + 2
+        # the longest COBS chunk whose packet fits max_packet_bytes (COBS adds n // 254 + 1)
+        self._max_encoded = SPEC.max_packet_bytes + SPEC.max_packet_bytes // 254 + 1
         self._accept = {pid: cls for pid, cls in _BY_ID.items() if cls.DEF.direction == direction}
 
     def reset(self) -> None:
@@ -302,9 +306,7 @@ class StreamDecoder:
             return None
         body, crc = raw[:-2], _CRC.unpack_from(raw, len(raw) - 2)[0]
         ptype = body[0]
-        known = _BY_ID.get(ptype)
-        seed = SPEC.seed_for(known.DEF) if known is not None else DEFINITION_HASH
-        if binascii.crc_hqx(body, seed) != crc:
+        if binascii.crc_hqx(body, _SEED.get(ptype, DEFINITION_HASH)) != crc:
             self._drop("bad_crc", len(chunk) + 1)
             st.consecutive_bad_crc += 1
             return None
@@ -323,7 +325,7 @@ class StreamDecoder:
 
     def _unpack(self, cls: type, body: bytes) -> Any | None:
         pdef = cls.DEF
-        s = pdef.struct
+        s = cls.STRUCT
         nbytes = len(body) + 3
         if cls is Info and (len(body) != s.size):
             if len(body) >= _INFO_PREFIX.size:  # another definition's INFO: keep what is frozen

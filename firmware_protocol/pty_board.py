@@ -123,33 +123,41 @@ class PtyBoard:
 
     def _open(self) -> None:
         master, slave = os.openpty()
-        tty.setraw(slave)  # no echo, no line editing: bytes pass untouched
-        tty.setraw(master)
-        os.set_blocking(master, False)
-        self._master, self._slave = master, slave
-        self.pts_path = os.ttyname(slave)
-        tmp = self.port + ".new"
-        if os.path.lexists(tmp):
-            os.unlink(tmp)
-        os.symlink(self.pts_path, tmp)
-        os.replace(tmp, self.port)  # atomic re-point, as udev does
-        self._generation = self.board.plug_generation
+        try:
+            tty.setraw(slave)  # no echo, no line editing: bytes pass untouched
+            tty.setraw(master)
+            os.set_blocking(master, False)
+            pts_path = os.ttyname(slave)
+            tmp = self.port + ".new"
+            if os.path.lexists(tmp):
+                os.unlink(tmp)
+            os.symlink(pts_path, tmp)
+            os.replace(tmp, self.port)  # atomic re-point, as udev does
+        except BaseException:
+            os.close(master)
+            os.close(slave)
+            raise
         self._out.clear()
+        self._generation = self.board.plug_generation
+        self.pts_path = pts_path
+        self._slave = slave
+        self._master = master  # last: `connected` means the link is in place
 
     def _close(self) -> None:
-        for fd in (self._master, self._slave):
+        try:
+            os.unlink(self.port)  # first: once `connected` is False the link is gone
+        except FileNotFoundError:
+            pass
+        for fd in (self._slave, self._master):
             if fd is not None:
                 try:
                     os.close(fd)
                 except OSError:
                     pass
-        self._master = self._slave = None
-        self.pts_path = None
         self._out.clear()
-        try:
-            os.unlink(self.port)
-        except FileNotFoundError:
-            pass
+        self.pts_path = None
+        self._slave = None
+        self._master = None
 
     def _wait_for(self, cond) -> None:
         deadline = time.monotonic() + _WAIT_S

@@ -234,9 +234,9 @@ def _invalid_command_vectors() -> Iterator[dict]:
     yield stream_vector("bad_length_ping_5_bytes", _wire(_raw_packet(0x86, 12, b"\x01\x02\x03\x04\x05")), ["bad_length"])
     yield stream_vector("bad_length_get_info_1_byte", _wire(_raw_packet(0x81, 13, b"\xff")), ["bad_length"])
 
-    # Length limits: 4097 zero-free bytes encode to exactly the longest accepted chunk.
-    limit = codec.SPEC.max_packet_bytes + codec.SPEC.max_packet_bytes // 254 + 2
-    at_limit, over = _zero_free_crc(0x82, 0x0101, 4097 - 5), _zero_free_crc(0x82, 0x0101, 4098 - 5)
+    # Length limits: max_packet_bytes (4096) zero-free bytes encode to exactly the longest accepted chunk.
+    limit = codec.SPEC.max_packet_bytes + codec.SPEC.max_packet_bytes // 254 + 1
+    at_limit, over = _zero_free_crc(0x82, 0x0101, 4096 - 5), _zero_free_crc(0x82, 0x0101, 4097 - 5)
     assert len(cobs.encode(at_limit)) == limit and len(cobs.encode(over)) == limit + 1
     yield stream_vector("long_start_at_encoded_limit_is_bad_length", _wire(at_limit), ["bad_length"])
     yield stream_vector("long_start_over_encoded_limit_is_too_long", _wire(over) + ping, ["too_long"])

@@ -255,8 +255,8 @@ class VirtualBoard:
         """Host→device bytes, in any chunking. Commands take effect at ``now_s`` (default: the last time seen)."""
         now = self._time(now_s, default_last=True)
         self._advance(now)
-        if not self._powered:
-            return
+        if not self._powered or not self._plugged:
+            return  # nothing reaches an unplugged board
         view = bytes(data)
         start = 0
         while start < len(view):

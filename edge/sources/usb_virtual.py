@@ -37,7 +37,6 @@ Usage::
 
 from __future__ import annotations
 
-import array
 import errno
 import threading
 import time
@@ -107,7 +106,7 @@ class VirtualUsbBackend(IBackend):
         pid: int = DEFAULT_PID,
         manufacturer: str = "CAvatar",
         product: str = "CAvatar carpet readout (virtual)",
-        max_packet_size: int = 64,
+        max_packet_size: int = 64,  # 64: full speed; 512: high speed
         bus: int = 1,
         address: int = 7,
         clock: Callable[[], float] = time.monotonic,
@@ -173,7 +172,8 @@ class VirtualUsbBackend(IBackend):
             idVendor=self.vid, idProduct=self.pid,
             bcdDevice=((major % 100) // 10 << 12) | (major % 10) << 8 | (minor % 10) << 4 | (patch % 10),
             iManufacturer=1, iProduct=2, iSerialNumber=3, bNumConfigurations=1,
-            address=dev.address, bus=self.bus, port_number=1, port_numbers=(1,), speed=usb.util.SPEED_FULL,
+            address=dev.address, bus=self.bus, port_number=1, port_numbers=(1,),
+            speed=usb.util.SPEED_HIGH if self.max_packet_size == 512 else usb.util.SPEED_FULL,
         )
 
     def get_configuration_descriptor(self, dev, config):

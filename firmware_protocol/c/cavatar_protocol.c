@@ -343,7 +343,7 @@ int cav_encode_nak(uint8_t *out, size_t cap, uint16_t seq, uint8_t cmd_type, uin
 
 /* ---------------------------------------------------------------- host -> device decoder
  * Per chunk (bytes between delimiters), checked in the Python decoder's order:
- *   longer than CAV_MAX_ENCODED_BYTES -> too_long (at once; the rest is skipped)
+ *   longer than CAV_MAX_CHUNK_BYTES -> too_long (at once; the rest is skipped)
  *   a COBS block running past the delimiter -> bad_cobs
  *   fewer than 5 decoded bytes -> too_short
  *   CRC (seeded by the type's seed kind) -> bad_crc
@@ -450,7 +450,7 @@ cav_rx_event cav_cmd_decoder_push(cav_cmd_decoder *dec, uint8_t byte, cav_comman
     }
     if (dec->discarding)
         return CAV_RX_NONE;
-    if (++dec->encoded_len > CAV_MAX_ENCODED_BYTES) {
+    if (++dec->encoded_len > CAV_MAX_CHUNK_BYTES) {
         rx_restart(dec);
         dec->discarding = 1;
         return rx_drop(dec, CAV_DROP_TOO_LONG);

@@ -25,7 +25,8 @@
 #endif
 #define CAV_FIXED_SEED                           0xFFFFu  /* seed of INFO and GET_INFO */
 #define CAV_MAX_PACKET_BYTES                     4096u  /* decoded: header + payload + CRC */
-#define CAV_MAX_ENCODED_BYTES                    4114u  /* longest COBS chunk a decoder accepts; >= COBS(max packet) + 0x00 */
+#define CAV_MAX_ENCODED_BYTES                    4114u  /* COBS(max packet) + 0x00: an encode buffer this big always suffices */
+#define CAV_MAX_CHUNK_BYTES                      4113u  /* longest COBS chunk (no delimiter) a decoder accepts: decodes to <= max packet */
 #define CAV_HEADER_BYTES                         3  /* type u8, seq u16 */
 #define CAV_CRC_BYTES                            2
 #define CAV_MIN_PACKET_BYTES                     (CAV_HEADER_BYTES + CAV_CRC_BYTES)

@@ -46,14 +46,20 @@ def test_info_and_default_size_frames_arrive_through_pyserial():
         try:
             port.write(cmd("GET_INFO", 0) + cmd("START", 1))
             dec = codec.StreamDecoder()
-            pkts = read_for(port, 1.0, dec)
+            pkts, t0 = [], time.monotonic()
+            while len(complete_frames(pkts)) < 10 and time.monotonic() - t0 < 6.0:
+                pkts += read_for(port, 0.05, dec)
+            elapsed = time.monotonic() - t0
         finally:
             port.close()
     info = [p for p in pkts if isinstance(p, codec.Info)][-1]
     assert (info.rows, info.cols, info.adc_bits, info.rate_mhz) == (96, 96, 12, 14000)
     frames = complete_frames(pkts)
-    assert 10 <= len(frames) <= 16  # ~14 in a second, paced in real time
+    assert len(frames) >= 10
     assert frames == list(range(frames[0], frames[0] + len(frames)))
+    assert elapsed >= (len(frames) - 1) / 14  # paced in real time, not faster
+    ends = {p.frame_seq: p.t_us for p in pkts if isinstance(p, codec.FrameEnd)}
+    assert {ends[b] - ends[a] for a, b in zip(frames, frames[1:])} <= {71428, 71429}  # 14 Hz on the device clock
     assert dec.stats.missed == 0 and not dec.stats.dropped
     assert not os.path.lexists(pty.port)  # stop() removed the symlink
     assert pty.error is None
@@ -111,15 +117,18 @@ def test_faults_reach_the_host():
         try:
             port.write(cmd("START", 1))
             dec = codec.StreamDecoder()
-            read_for(port, 0.2, dec)
+            pkts = read_for(port, 0.2, dec)
             pty.board.garbage(50, zeros=False)
             pty.board.skip_frames(2)
-            pkts = read_for(port, 0.4, dec)
+            after, deadline = [], time.monotonic() + 5.0  # a loaded machine may lag: wait for frames, not a fixed time
+            while sum(isinstance(p, codec.FrameEnd) for p in after) < 3 and time.monotonic() < deadline:
+                after += read_for(port, 0.05, dec)
+            pkts += after
         finally:
             port.close()
-    assert sum(dec.stats.dropped.values()) >= 1
-    seqs = [p.frame_seq for p in pkts if isinstance(p, codec.FrameEnd)]
-    assert 3 in {b - a for a, b in zip(seqs, seqs[1:])}
+    assert sum(dec.stats.dropped.values()) >= 1 and pty.board.injected["garbage_bytes"] == 50
+    seen = {p.frame_seq for p in pkts if isinstance(p, (codec.Row, codec.FrameEnd))}
+    assert len(set(range(min(seen), max(seen) + 1)) - seen) == 2  # the skipped frames
 
 
 def test_a_custom_link_path_and_clean_shutdown(tmp_path):
