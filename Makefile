@@ -37,6 +37,7 @@ test: test-deps
 
 bench: test-deps
 	$(PY) bench/decoder_throughput.py
+	$(PY) bench/body_model.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
