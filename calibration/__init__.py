@@ -1,1 +1,6 @@
 """Calibration of the carpet's sensor grid: procedures, fault detection, file format, runtime apply."""
+
+from calibration.apply import Applied, Applier
+from calibration.file import FAULT, UNUSABLE, Calibration, CalibrationError, Curve
+
+__all__ = ["Applied", "Applier", "Calibration", "CalibrationError", "Curve", "FAULT", "UNUSABLE"]
