@@ -38,6 +38,7 @@ test: test-deps
 bench: test-deps
 	$(PY) bench/decoder_throughput.py
 	$(PY) bench/body_model.py
+	$(PY) bench/sim_sensor.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
