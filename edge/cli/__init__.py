@@ -23,6 +23,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.stream",
     "edge.cli.peripherals",
     "edge.cli.render",
+    "sim.cli",
 ]
 
 EPILOG = """\

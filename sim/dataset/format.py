@@ -11,10 +11,10 @@ Arrays in a shard (N frames, P = manifest["max_people"] person slots):
 
     counts          (N, H, W) uint16   raw sensor counts (what the board sends)
     pressure_kpa    (N, H, W) float16  true pressure at the sensels
-    fault_mask      (H, W)    uint8    bit flags of configured sensor faults (0 = healthy)
+    fault_mask      (H, W)    uint8    bit flags of configured sensor faults, FAULT_BITS (0 = healthy)
     t_s             (N,)      float64  time of each frame, seconds since the sequence began
     sequence        (N,)      int32    sequence index within the shard (frames of one sequence are consecutive)
-    frame_flags     (N,)      uint8    bit 0 dropped-then-repeated, bit 1 torn, bit 2 duplicate
+    frame_flags     (N,)      uint8    FRAME_FLAGS: 1 frames were dropped just before, 2 torn, 4 duplicate, 8 corrupt
     present         (N, P)    bool     person slot p is on the carpet
     subject         (N, P)    int16    index into manifest["subjects"], -1 when absent
     activity        (N, P)    int8     index into manifest["activities"], -1 when absent
@@ -43,7 +43,9 @@ import numpy as np
 
 SCHEMA = "cavatar.dataset/1"
 SPLITS = ("train", "val", "test")
-FRAME_FLAGS = {"repeated": 1, "torn": 2, "duplicate": 4}
+FRAME_FLAGS = {"after_drop": 1, "torn": 2, "duplicate": 4, "corrupt": 8}
+# fault_mask bits: the simulator's configured sensor faults (ground truth for calibration)
+FAULT_BITS = {"dead": 1, "half_dead": 2, "stuck": 4, "noisy": 8, "short": 16, "mux_bank": 32, "outside": 64}
 
 FRAME_ARRAYS = {"counts": np.uint16, "pressure_kpa": np.float16, "t_s": np.float64, "sequence": np.int32, "frame_flags": np.uint8}
 PERSON_ARRAYS = {

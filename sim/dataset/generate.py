@@ -1,0 +1,222 @@
+"""Generate a dataset: motion → posed meshes → contact physics → sensor → shards.
+
+    generate("data/train96", subjects=12, seconds_per_activity=10, people=(1, 3), grid=96, seed=0)
+
+Subjects are split 80/10/10 by subject (at least one in val and test when there are
+three or more), so test subjects are never seen in training. Each *sequence* is one
+scene: 1–3 people of one split doing activities in their own order; a sequence is one
+shard. Each sequence gets its own carpet session (a random carpet per ``carpets_per_split``
+group, a new session per sequence: temperature, drift), so the model sees many carpets.
+Everything derives from ``seed``: the same call writes the same files. Sequences are
+independent and run on ``workers`` processes.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim.dataset.format import FAULT_BITS, FRAME_FLAGS, DatasetWriter, Subject
+
+PAPER_ACTIVITIES = ("stepping", "bending", "turning", "squat", "twisting", "raising_arms", "lunge", "sitting", "push_up", "sit_up")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One sequence to render: which subjects, which activities, which carpet, which seeds."""
+
+    index: int
+    split: str
+    subjects: tuple[int, ...]
+    activities: tuple[str, ...]
+    seconds_per_activity: float
+    carpet_seed: int
+    session: int
+    seed: int
+
+
+def split_subjects(n: int, rng: np.random.Generator) -> list[str]:
+    """80/10/10 by subject, at least one val and one test subject when n ≥ 3."""
+    n_test = max(1, round(0.1 * n)) if n >= 3 else 0
+    n_val = max(1, round(0.1 * n)) if n >= 3 else 0
+    splits = ["test"] * n_test + ["val"] * n_val + ["train"] * (n - n_test - n_val)
+    return [splits[i] for i in rng.permutation(n)]
+
+
+def plan_sequences(subject_splits: list[str], people: tuple[int, int], activities: tuple[str, ...],
+                   seconds_per_activity: float, rng: np.random.Generator, carpets_per_split: int = 3) -> list[Plan]:
+    """Every subject does every activity once alone; multi-person scenes are added on top."""
+    plans: list[Plan] = []
+    lo, hi = people
+    for split in ("train", "val", "test"):
+        members = [i for i, s in enumerate(subject_splits) if s == split]
+        if not members:
+            continue
+        groups: list[tuple[int, ...]] = []
+        if lo <= 1:
+            groups += [(m,) for m in members]
+        for k in range(max(2, lo), hi + 1):
+            if len(members) >= k:
+                for _ in range(max(1, len(members) // k)):
+                    groups.append(tuple(int(x) for x in rng.choice(members, size=k, replace=False)))
+        for g in groups:
+            plans.append(Plan(len(plans), split, g, activities, seconds_per_activity,
+                              carpet_seed=int(rng.integers(carpets_per_split)) + 1000 * ("train", "val", "test").index(split),
+                              session=len(plans), seed=int(rng.integers(2**31))))
+    return plans
+
+
+class Renderer:
+    """Per-process models (body, contact, tissue), reused across sequences."""
+
+    def __init__(self, grid: int, pitch_m: float, rate_hz: float, adc_bits: int, body: str = "lite") -> None:
+        from edge.body import BodyModel
+        from sim.contact import ContactModel, tissue_stiffness
+
+        self.grid, self.pitch_m, self.rate_hz, self.adc_bits = grid, pitch_m, rate_hz, adc_bits
+        self.body = BodyModel.load(body)
+        self.contact = ContactModel(grid, grid, pitch_m=pitch_m)
+        self.tissue = tissue_stiffness(self.body)
+
+    def render(self, plan: Plan, subject_list: list[Any]) -> dict[str, np.ndarray]:
+        from sim.contact import mesh_centroid_m, subject_mass_kg
+        from sim.motion import scene
+        from sim.sensor import CarpetSensor, FrameStream, StreamConfig
+
+        rng = np.random.default_rng(plan.seed)
+        subjects = [subject_list[i] for i in plan.subjects]
+        size = self.grid * self.pitch_m
+        sc = scene(subjects, list(plan.activities), plan.seconds_per_activity, self.rate_hz, (size, size), rng, model=self.body)
+        n, p_max = sc.num_frames, 3
+        pressure = np.zeros((n, self.grid, self.grid), np.float32)
+        out = {
+            "present": np.zeros((n, p_max), bool), "subject": np.full((n, p_max), -1, np.int16),
+            "activity": np.full((n, p_max), -1, np.int8), "pose_aa": np.zeros((n, p_max, 72), np.float32),
+            "betas": np.zeros((n, p_max, 10), np.float32), "transl_m": np.zeros((n, p_max, 3), np.float32),
+            "joints_m": np.zeros((n, p_max, 24, 3), np.float32),
+        }
+        dt = 1.0 / self.rate_hz
+        for slot, (track, subj_index) in enumerate(zip(sc.tracks, plan.subjects)):
+            betas = np.broadcast_to(track.betas, (n, len(track.betas)))
+            fw = self.body.forward(track.pose_aa, betas, track.transl_m, vertices=True)
+            verts, joints = fw["vertices"], fw["joints"]
+            mass = subject_mass_kg(self.body, track.betas)
+            com = np.stack([mesh_centroid_m(v, self.body.faces) for v in verts])
+            acc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0)
+            for t in range(n):
+                res = self.contact.pressure_kpa(verts[t], self.body.faces, mass, acc_z_m_s2=float(acc[t, 2]), com_m=com[t],
+                                                acc_xy_m_s2=acc[t, :2], tissue_kpa_per_mm=self.tissue)
+                pressure[t] += res.pressure_kpa
+            out["present"][:, slot] = True
+            out["subject"][:, slot] = subj_index
+            out["activity"][:, slot] = track.activity
+            out["pose_aa"][:, slot] = track.pose_aa
+            out["betas"][:, slot] = track.betas
+            out["transl_m"][:, slot] = track.transl_m
+            out["joints_m"][:, slot] = joints
+        sensor = CarpetSensor.random(plan.carpet_seed, grid=self.grid, adc_bits=self.adc_bits, pitch_mm=self.pitch_m * 1e3)
+        sensor.start_session(plan.session)
+        stream = FrameStream(sensor, StreamConfig(drop_rate=0.003, duplicate_rate=0.003, tear_rate=0.002, jitter_s=0.002),
+                             seed=plan.seed)
+        counts, t_s, flags, truth = [], [], [], []
+        for c, ts, fl in stream.frames(pressure):
+            counts.append(c)
+            t_s.append(ts)
+            truth.append(fl.seq)  # dropped frames are never yielded: ground truth follows the true frame
+            flags.append(FRAME_FLAGS["after_drop"] * (fl.dropped_before > 0) | FRAME_FLAGS["torn"] * bool(fl.torn)
+                         | FRAME_FLAGS["duplicate"] * fl.duplicate | FRAME_FLAGS["corrupt"] * bool(fl.corrupt))
+        truth = np.asarray(truth)
+        out = {k: v[truth] for k, v in out.items()}
+        pressure = pressure[truth]
+        counts = np.stack(counts)
+        t_s = np.asarray(t_s)
+        flags = np.asarray(flags, np.uint8)
+        n = len(counts)
+        fault = np.zeros((self.grid, self.grid), np.uint8)
+        for kind, mask in sensor.fault_masks.items():
+            if kind in FAULT_BITS:
+                fault[mask] |= FAULT_BITS[kind]
+        return {"counts": counts, "pressure_kpa": pressure.astype(np.float16), "t_s": t_s,
+                "sequence": np.zeros(n, np.int32), "frame_flags": flags, "fault_mask": fault, **out}
+
+
+_RENDERER: Renderer | None = None
+
+
+def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray]]:
+    global _RENDERER
+    plan, subjects, settings = args
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    if _RENDERER is None:
+        _RENDERER = Renderer(**settings)
+    return plan.index, _RENDERER.render(plan, subjects)
+
+
+def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: float = 10.0, people: tuple[int, int] = (1, 1),
+             grid: int = 96, pitch_mm: float = 19.05, rate_hz: float = 14.0, adc_bits: int = 12, seed: int = 0,
+             activities: tuple[str, ...] = PAPER_ACTIVITIES, workers: int = 1, body: str = "lite",
+             progress: bool = True, overwrite: bool = False) -> Path:
+    from sim.motion import ACTIVITIES, Subject as MotionSubject
+
+    if not 1 <= people[0] <= people[1] <= 3:
+        raise ValueError(f"people must be a range within 1..3, got {people}")
+    unknown = [a for a in activities if a not in ACTIVITIES]
+    if unknown:
+        raise ValueError(f"unknown activities {unknown}; known: {list(ACTIVITIES)}")
+    rng = np.random.default_rng(seed)
+    motion_subjects = [MotionSubject.random(i, seed * 1000 + i) for i in range(subjects)]
+    splits = split_subjects(subjects, rng)
+    plans = plan_sequences(splits, people, tuple(activities), seconds_per_activity, rng)
+    settings = {"grid": grid, "pitch_m": pitch_mm / 1000, "rate_hz": rate_hz, "adc_bits": adc_bits, "body": body}
+    subject_records = [Subject(f"s{i:02d}", splits[i], [float(b) for b in s.betas]) for i, s in enumerate(motion_subjects)]
+    writer = DatasetWriter(out_dir, rows=grid, cols=grid, pitch_m=pitch_mm / 1000, rate_hz=rate_hz, activities=list(ACTIVITIES),
+                           subjects=subject_records, source="sim", overwrite=overwrite,
+                           settings={"seed": seed, "subjects": subjects, "seconds_per_activity": seconds_per_activity,
+                                     "people": list(people), "activities": list(activities), "adc_bits": adc_bits, "body": body})
+    jobs = [(p, motion_subjects, settings) for p in plans]
+    t0, done, frames = time.monotonic(), 0, 0
+    results: dict[int, dict[str, np.ndarray]] = {}
+    next_index = 0
+
+    def flush() -> None:  # write shards in plan order, whatever order workers finish in
+        nonlocal next_index
+        while next_index in results:
+            arrays = results.pop(next_index)
+            plan = plans[next_index]
+            writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed})
+            next_index += 1
+
+    def report(arrays: dict[str, np.ndarray]) -> None:
+        nonlocal done, frames
+        done += 1
+        frames += len(arrays["counts"])
+        if progress:
+            el = time.monotonic() - t0
+            eta = el / done * (len(plans) - done)
+            bar = "#" * int(30 * done / len(plans))
+            print(f"\r[{bar:<30}] {done}/{len(plans)} sequences, {frames} frames, {frames / el:.0f} frames/s, ETA {eta:.0f} s",
+                  end="", file=sys.stderr, flush=True)
+
+    if workers <= 1:
+        for job in jobs:
+            index, arrays = _worker(job)
+            report(arrays)
+            results[index] = arrays
+            flush()
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            for index, arrays in pool.map(_worker, jobs):
+                report(arrays)
+                results[index] = arrays
+                flush()
+    writer.close()
+    if progress:
+        print(file=sys.stderr)
+    return Path(out_dir)
