@@ -14,7 +14,7 @@ from edge.sources.base import Link, LinkLost, Option, parse_bool, parse_url
 from firmware_protocol import codec
 
 SCHEME = "sim"
-FORM = "sim://?people=2&seed=7&grid=96&rate=14&bits=12&speed=1"
+FORM = "sim://?people=2&seed=7&grid=96&rate=14&speed=1&world=bodies"
 
 
 def _grid(text: str) -> int:
@@ -31,6 +31,13 @@ def _people(text: str) -> int:
     return value
 
 
+def _world(text: str) -> str:
+    if text not in ("bodies", "footsteps"):
+        raise ValueError("world must be 'bodies' (simulated people: motion, contact physics, sensor model) "
+                         "or 'footsteps' (walking feet only, cheap)")
+    return text
+
+
 def _bits(text: str) -> int:
     value = int(text)
     if value not in (8, 10, 12, 16):
@@ -39,12 +46,13 @@ def _bits(text: str) -> int:
 
 
 OPTIONS = {
-    "people": Option(_people, 1, "people walking on the carpet, 0..3"),
+    "world": Option(_world, "bodies", "bodies = simulated people doing the paper's activities; footsteps = walking feet only"),
+    "people": Option(_people, 1, "people on the carpet, 0..3"),
     "seed": Option(int, 0, "random seed of the scene and the sensor"),
     "grid": Option(_grid, 96, "sensels per side"),
     "pitch_mm": Option(float, 19.05, "sensel pitch in millimetres"),
     "rate": Option(float, 14.0, "frame rate in Hz"),
-    "bits": Option(_bits, 12, "ADC bits per sample: 8, 10, 12 or 16"),
+    "bits": Option(_bits, 12, "ADC bits per sample: 8, 10, 12 or 16 (footsteps world; bodies draws its own)"),
     "speed": Option(float, 1.0, "1 = real time, 0 = as fast as possible"),
     "faults": Option(parse_bool, False, "inject line noise now and then (bit flips, garbage, torn frames)"),
 }
@@ -66,14 +74,23 @@ class SimLink(Link):
 
     def open(self) -> None:
         from firmware_protocol.virtual_board import VirtualBoard
-        from sim.footsteps import FootstepCarpet
 
         o = self.opts
-        carpet = FootstepCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"])
+        if o["world"] == "footsteps":
+            from sim.footsteps import FootstepCarpet
+
+            carpet = FootstepCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"])
+            bits, sign = o["bits"], -1
+        else:
+            from sim.live import LiveCarpet
+
+            carpet = LiveCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"])
+            bits, sign = carpet.adc_bits, carpet.sign
+        self.carpet = carpet
         tiles = 3 if o["grid"] % 3 == 0 else 1
         self.board = VirtualBoard(
-            rows=o["grid"], cols=o["grid"], tile_rows=tiles, tile_cols=tiles, adc_bits=o["bits"],
-            packing=packing_for(o["bits"]), sign=-1, rate_hz=o["rate"], device_id=f"sim-{o['seed']}", frames=carpet,
+            rows=o["grid"], cols=o["grid"], tile_rows=tiles, tile_cols=tiles, adc_bits=bits,
+            packing=packing_for(bits), sign=sign, rate_hz=o["rate"], device_id=f"sim-{o['seed']}", frames=carpet,
         )
         self._t0 = time.monotonic()
         self._virtual_now = 0.0

@@ -20,7 +20,7 @@ def take(source, n, timeout_s=10.0):
 
 
 def test_virtual_carpet_frames_arrive_whole_and_in_order():
-    with open_source("sim://?people=2&seed=7&speed=0") as source:
+    with open_source("sim://?world=footsteps&people=2&seed=7&speed=0") as source:
         frames = take(source, 30)
         info = source.info
         stats = source.stats()
@@ -35,7 +35,7 @@ def test_virtual_carpet_frames_arrive_whole_and_in_order():
 
 
 def test_line_noise_is_counted_and_frames_keep_flowing():
-    with open_source("sim://?people=1&seed=3&speed=0&faults=1") as source:
+    with open_source("sim://?world=footsteps&people=1&seed=3&speed=0&faults=1") as source:
         frames = take(source, 120)
         stats = source.stats()
     assert len(frames) == 120
@@ -45,7 +45,7 @@ def test_line_noise_is_counted_and_frames_keep_flowing():
 
 
 def test_commands_are_acknowledged_or_refused_with_a_reason():
-    with open_source("sim://?speed=0") as source:
+    with open_source("sim://?world=footsteps&speed=0") as source:
         ack = source.command("PING", token=0xC0FFEE)
         assert isinstance(ack, codec.Ack) and ack.value == 0xC0FFEE
         with pytest.raises(CommandRefused, match="out_of_range"):
@@ -54,7 +54,7 @@ def test_commands_are_acknowledged_or_refused_with_a_reason():
 
 def test_record_then_inspect_then_replay_gives_the_same_frames(tmp_path, capsys):
     out = tmp_path / "capture.bin"
-    assert main(["record", "--source", "sim://?people=1&seed=5&speed=0", "--frames", "12", str(out)]) == 0
+    assert main(["record", "--source", "sim://?world=footsteps&people=1&seed=5&speed=0", "--frames", "12", str(out)]) == 0
     assert not (tmp_path / "capture.bin.part").exists()
     assert main(["inspect", "--json", str(out)]) == 0
     import json
@@ -65,7 +65,7 @@ def test_record_then_inspect_then_replay_gives_the_same_frames(tmp_path, capsys)
     assert summary["rate_hz"] == pytest.approx(14.0, rel=0.02)
     with open_source(f"replay://{out}?speed=0") as replay:
         replayed = take(replay, 100)
-    with open_source("sim://?people=1&seed=5&speed=0") as live:
+    with open_source("sim://?world=footsteps&people=1&seed=5&speed=0") as live:
         fresh = take(live, len(replayed))
     assert len(replayed) >= 12
     for a, b in zip(replayed, fresh):
@@ -75,7 +75,7 @@ def test_record_then_inspect_then_replay_gives_the_same_frames(tmp_path, capsys)
 def test_record_refuses_to_overwrite_and_leaves_nothing_on_failure(tmp_path, capsys):
     out = tmp_path / "c.bin"
     out.write_bytes(b"keep me")
-    assert main(["record", "--source", "sim://?speed=0", "--frames", "2", str(out)]) == 2
+    assert main(["record", "--source", "sim://?world=footsteps&speed=0", "--frames", "2", str(out)]) == 2
     assert out.read_bytes() == b"keep me"
     assert "--force" in capsys.readouterr().err
     missing = tmp_path / "d.bin"
@@ -85,7 +85,7 @@ def test_record_refuses_to_overwrite_and_leaves_nothing_on_failure(tmp_path, cap
 
 def test_replay_paces_frames_by_device_time(tmp_path):
     out = tmp_path / "c.bin"
-    assert main(["record", "--source", "sim://?speed=0", "--frames", "8", str(out)]) == 0
+    assert main(["record", "--source", "sim://?world=footsteps&speed=0", "--frames", "8", str(out)]) == 0
     t0 = time.monotonic()
     with open_source(f"replay://{out}?speed=4") as replay:
         frames = take(replay, 8)
@@ -105,7 +105,7 @@ def test_a_device_of_another_protocol_version_is_refused_naming_both(tmp_path):
 
 
 def test_a_slow_consumer_gets_the_newest_frame_not_a_growing_backlog():
-    with open_source("sim://?speed=4", queue_frames=2) as source:
+    with open_source("sim://?world=footsteps&speed=4", queue_frames=2) as source:
         first = source.read_frame(timeout_s=3)
         time.sleep(1.5)  # ~84 frames are produced meanwhile at 4x real time
         later = source.read_frame(timeout_s=3)
