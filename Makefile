@@ -39,6 +39,8 @@ bench: test-deps
 	$(PY) bench/decoder_throughput.py
 	$(PY) bench/body_model.py
 	$(PY) bench/sim_sensor.py
+	$(PY) bench/sim_contact.py
+	$(PY) bench/scene_pipeline.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
