@@ -68,16 +68,19 @@ class FootstepCarpet:
         rng = np.random.default_rng(self.seed)
         self.gain = np.clip(rng.lognormal(0.0, 0.15, (rows, cols)), 0.5, 2.0)
         self.offset = rng.normal(0.0, 3.0, (rows, cols))
-        self._walkers = [
-            _Walker(
-                pos_m=rng.uniform(0.2, 0.8, 2) * size,
+        self._walkers = []
+        for _ in range(self.people):  # spawn at least 0.8 m apart, so nobody starts blocked
+            for _ in range(100):
+                pos = rng.uniform(0.2, 0.8, 2) * size
+                if all(np.linalg.norm(pos - w.pos_m) > 0.8 for w in self._walkers):
+                    break
+            self._walkers.append(_Walker(
+                pos_m=pos,
                 target_m=rng.uniform(0.15, 0.85, 2) * size,
                 mass_kg=float(rng.uniform(50, 95)),
                 speed_m_s=float(rng.uniform(0.6, 1.2)),
                 phase=float(rng.uniform(0, 1)),
-            )
-            for _ in range(self.people)
-        ]
+            ))
         self._rng = rng
         self._state_index = 0
 
@@ -124,7 +127,9 @@ class FootstepCarpet:
                 continue
             step = heading / dist * min(dist, w.speed_m_s * self.dt_s)
             new = w.pos_m + step
-            if all(np.linalg.norm(new - o.pos_m) > 0.6 for j, o in enumerate(self._walkers) if j != i):
+            others = [o.pos_m for j, o in enumerate(self._walkers) if j != i]
+            # a step may not bring anyone closer than 0.6 m (moving apart is always allowed)
+            if all(np.linalg.norm(new - o) > 0.6 or np.linalg.norm(new - o) > np.linalg.norm(w.pos_m - o) for o in others):
                 w.pos_m = new
                 w.phase = (w.phase + w.speed_m_s * self.dt_s / 1.1) % 1.0
             else:  # someone is in the way: pick another spot

@@ -1,0 +1,230 @@
+"""The scene step: calibrated pressure in, people out.
+
+    tracker = SceneTracker(96, 96, pitch_m=0.01905, config=SceneConfig())
+    frame = tracker.update(pressure_kpa, t_s, masks=unusable)   # (H, W) float32 kPa, (H, W) bool
+    if not frame.valid:   ...  # frame.reason says why; counted in frame.counters
+    elif frame.empty:     ...  # heartbeat only, no inference
+    for person in frame.people:
+        if person.still: ...   # reuse the last result for person.track_id
+        x = frame.pressure_kpa * person.mask   # that person's pressure only
+
+Stages: validate → fill masked → filters → contacts → grouping → tracking → masks and
+stillness. ``last_timings_ms`` holds the cost of each stage for the last frame.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from edge.scene.config import SceneConfig
+from edge.scene.contacts import detect_contacts, sensel_centres_m
+from edge.scene.filters import FilterChain
+from edge.scene.people import group_blobs, prior_keys
+from edge.scene.tracking import Observation, PeopleTracker
+from edge.scene.validate import REASONS, check_frame
+
+
+@dataclass(frozen=True, slots=True)
+class PersonObservation:
+    """One confirmed person in one frame.
+
+    cop_m, force_n: one-euro filtered centre of pressure (x, y in the carpet frame) and total force;
+    cop_raw_m, force_raw_n: this frame's measurement, integrated over ``mask`` on the pressure before
+    the spatial filters (the 3×3 median erodes thin contacts); area_m2: contact area;
+    mask: (H, W) bool, the person's contacts grown by mask_margin_mm; bbox: (rows, cols) slices of the mask;
+    still: pressure under the person unchanged within noise since their last non-still frame.
+    """
+
+    track_id: int
+    cop_m: np.ndarray
+    force_n: float
+    cop_raw_m: np.ndarray
+    force_raw_n: float
+    area_m2: float
+    velocity_m_s: np.ndarray
+    mask: np.ndarray
+    bbox: tuple[slice, slice]
+    contacts: int
+    still: bool
+    age_s: float
+
+
+@dataclass(frozen=True, slots=True)
+class SceneFrame:
+    """Result of one update. pressure_kpa: the filtered frame (None when invalid or empty)."""
+
+    t_s: float
+    valid: bool
+    reason: str | None
+    people: list[PersonObservation]
+    empty: bool
+    still: bool
+    noise_kpa: float
+    pressure_kpa: np.ndarray | None
+    counters: dict[str, int]
+
+
+class SceneTracker:
+    """Stateful scene logic for one carpet of ``rows``×``cols`` sensels at ``pitch_m``."""
+
+    def __init__(self, rows: int, cols: int, pitch_m: float, config: SceneConfig | None = None) -> None:
+        if rows < 1 or cols < 1 or not pitch_m > 0:
+            raise ValueError(f"need rows, cols ≥ 1 and pitch_m > 0, got {rows}, {cols}, {pitch_m}")
+        self.shape = (rows, cols)
+        self.pitch_m = float(pitch_m)
+        self.config = cfg = config or SceneConfig()
+        self.filters = FilterChain(self.pitch_m, cfg)
+        self.people = PeopleTracker(cfg)
+        self.x_m, self.y_m = sensel_centres_m(rows, cols, self.pitch_m)
+        self.min_area_sensels = max(1, int(np.ceil(cfg.min_blob_area_cm2 * 1e-4 / self.pitch_m**2 - 1e-9)))
+        self.margin_sensels = int(round(cfg.mask_margin_mm * 1e-3 / self.pitch_m))
+        self._noise: float | np.ndarray | None = cfg.noise_kpa
+        self._noise_fixed = cfg.noise_kpa is not None
+        self._noise_t_s: float | None = None
+        self._last_t_s: float | None = None
+        self._prev_keys: np.ndarray | None = None
+        self.counters: dict[str, int] = {"frames": 0, "valid": 0, "empty": 0, "still": 0,
+                                         **{f"rejected_{r}": 0 for r in REASONS}}
+        self.last_timings_ms: dict[str, float] = {}
+
+    # --- noise and thresholds --------------------------------------------------------
+    def set_noise(self, noise_kpa: float | np.ndarray) -> None:
+        """Fix the noise σ (kPa): a scalar or a per-sensel (H, W) map from the calibration."""
+        noise = np.asarray(noise_kpa, dtype=np.float32)
+        if noise.ndim and noise.shape != self.shape or not np.all(noise > 0):
+            raise ValueError(f"noise_kpa must be > 0, a scalar or {self.shape}")
+        self._noise = float(noise) if noise.ndim == 0 else noise
+        self._noise_fixed = True
+
+    def _update_noise(self, p: np.ndarray, bad: np.ndarray | None, t_s: float) -> None:
+        if self._noise_fixed or (self._noise_t_s is not None and t_s - self._noise_t_s < self.config.noise_update_s):
+            return
+        free = np.ones(self.shape, dtype=bool) if bad is None else ~bad
+        if self._prev_keys is not None:
+            free &= ndimage.maximum_filter(self._prev_keys, size=2 * self.margin_sensels + 3) == 0
+        x = p[free]
+        if x.size < 16:
+            return
+        sigma = max(1.4826 * float(np.median(np.abs(x - np.median(x)))), 1e-4)
+        self._noise = sigma if self._noise is None else 0.7 * float(self._noise) + 0.3 * sigma
+        self._noise_t_s = t_s
+
+    def thresholds_kpa(self) -> tuple[float | np.ndarray, float | np.ndarray]:
+        """(start, grow) thresholds in kPa: start = max(start_sigmas·noise, start_min_kpa), grow = grow_fraction·start."""
+        cfg = self.config
+        noise = 0.0 if self._noise is None else self._noise
+        start = np.maximum(cfg.start_sigmas * noise, cfg.start_min_kpa)
+        start = float(start) if np.ndim(start) == 0 else start.astype(np.float32)
+        return start, start * cfg.grow_fraction
+
+    # --- the step ------------------------------------------------------------------------
+    def update(self, pressure_kpa: np.ndarray, t_s: float, masks: np.ndarray | None = None) -> SceneFrame:
+        """One frame of calibrated pressure (H, W) kPa at time t_s (s); masks: (H, W) bool of unusable sensels."""
+        cfg = self.config
+        c = self.counters
+        c["frames"] += 1
+        t0 = time.perf_counter()
+        reason, p, bad = check_frame(pressure_kpa, masks, t_s, self.shape, self.pitch_m, self._last_t_s, cfg)
+        noise_now = float(np.mean(self._noise)) if self._noise is not None else 0.0
+        if reason is not None:
+            c[f"rejected_{reason}"] += 1
+            self.last_timings_ms = {"validate": (time.perf_counter() - t0) * 1e3}
+            return SceneFrame(float(t_s) if isinstance(t_s, (int, float)) else float("nan"), False, reason, [], False, False,
+                              noise_now, None, dict(c))
+        t_s = float(t_s)
+        self._last_t_s = t_s
+        c["valid"] += 1
+        t1 = time.perf_counter()
+        p = self.filters.fill(p, bad)
+        self._update_noise(p, bad, t_s)
+        start, grow = self.thresholds_kpa()
+        pre, filtered = self.filters(p, t_s, float(np.min(grow)))
+        t2 = time.perf_counter()
+        if filtered is None:
+            labels, blobs = None, []
+        else:
+            labels, blobs = detect_contacts(filtered, start, grow, self.pitch_m, self.min_area_sensels, self.x_m, self.y_m,
+                                            loaded=pre > start)
+        t3 = time.perf_counter()
+        people = self._track(pre, filtered, labels, blobs, t_s)
+        t4 = time.perf_counter()
+        self.last_timings_ms = {"validate": (t1 - t0) * 1e3, "filter": (t2 - t1) * 1e3, "contacts": (t3 - t2) * 1e3,
+                                "track": (t4 - t3) * 1e3, "total": (t4 - t0) * 1e3}
+        empty = not blobs
+        still = bool(people) and all(q.still for q in people)
+        c["empty"] += empty
+        c["still"] += still
+        c.update(self.people.counters)
+        noise_now = float(np.mean(self._noise)) if self._noise is not None else 0.0
+        return SceneFrame(t_s, True, None, people, empty, still, noise_now, filtered, dict(c))
+
+    def _track(self, pre: np.ndarray, filtered: np.ndarray | None, labels: np.ndarray | None, blobs: list,
+               t_s: float) -> list[PersonObservation]:
+        """Group contacts, measure each group on ``pre`` over its mask, track, and build the observations."""
+        cfg = self.config
+        if not blobs:
+            self.people.step([], [], t_s)
+            self._prev_keys = None
+            return []
+        centres = np.array([b.cop_m for b in blobs])
+        priors = prior_keys(labels, len(blobs), self._prev_keys)
+        groups = group_blobs(centres, priors, self.people.predictions(t_s), cfg.group_radius_m, cfg.attach_radius_m)
+        lut = np.zeros(len(blobs) + 1, dtype=np.int32)
+        for g, (idx, _) in enumerate(groups):
+            lut[idx + 1] = g + 1
+        owner = lut[labels]  # group index + 1 per contact sensel
+        grown = owner
+        if self.margin_sensels > 0:
+            spread = ndimage.maximum_filter(owner, size=2 * self.margin_sensels + 1)
+            grown = np.where(owner > 0, owner, spread)
+        sensel_m2 = self.pitch_m * self.pitch_m
+        obs, masks = [], []
+        for g, (idx, _) in enumerate(groups):
+            mask = grown == g + 1
+            w = pre[mask]
+            total = float(w.sum(dtype=np.float64))
+            if total > 0:
+                cop = np.array([float(w @ self.x_m[mask]), float(w @ self.y_m[mask])]) / total
+            else:
+                f = np.array([blobs[i].force_n for i in idx])
+                cop = (centres[idx] * f[:, None]).sum(axis=0) / max(f.sum(), 1e-12)
+            obs.append(Observation(cop_m=cop, force_n=total * sensel_m2 * 1e3))
+            masks.append(mask)
+        tracks = self.people.step(obs, [k for _, k in groups], t_s)
+        keys = np.zeros(len(groups) + 1, dtype=np.int32)
+        for g, tr in enumerate(tracks):
+            keys[g + 1] = 0 if tr is None else tr.key
+        self._prev_keys = keys[owner]
+        out = []
+        for (idx, _), tr, o, mask in zip(groups, tracks, obs, masks):
+            if tr is None or tr.track_id is None:
+                continue
+            out.append(PersonObservation(
+                track_id=tr.track_id, cop_m=tr.cop_m.copy(), force_n=tr.force_n, cop_raw_m=o.cop_m, force_raw_n=o.force_n,
+                area_m2=float(sum(blobs[i].area_m2 for i in idx)), velocity_m_s=tr.velocity_m_s.copy(), mask=mask,
+                bbox=_bbox(mask), contacts=len(idx), still=self._stillness(tr, filtered, mask), age_s=t_s - tr.first_t_s))
+        return out
+
+    def _stillness(self, tr, filtered: np.ndarray, mask: np.ndarray) -> bool:
+        tol = self.config.still_rms_kpa
+        if tol is None:
+            tol = max(3.0 * (float(np.mean(self._noise)) if self._noise is not None else 0.0), 0.05)
+        if tr.ref_pressure_kpa is not None:
+            union = mask | tr.ref_mask
+            d = filtered[union] - tr.ref_pressure_kpa[union]
+            if float(np.sqrt(np.mean(d * d))) <= tol:
+                return True
+        tr.ref_pressure_kpa, tr.ref_mask = filtered, mask
+        return False
+
+
+def _bbox(mask: np.ndarray) -> tuple[slice, slice]:
+    rows, cols = np.any(mask, axis=1), np.any(mask, axis=0)
+    r, c = np.nonzero(rows)[0], np.nonzero(cols)[0]
+    if len(r) == 0:
+        return slice(0, 0), slice(0, 0)
+    return slice(int(r[0]), int(r[-1]) + 1), slice(int(c[0]), int(c[-1]) + 1)
