@@ -28,6 +28,7 @@ $(VENV)/.test: $(VENV)/.runtime
 	touch $@
 
 test-deps: $(VENV)/.test
+	test -x /usr/sbin/mosquitto || command -v mosquitto >/dev/null || (apt-get update && apt-get install -y mosquitto)
 
 run: venv
 	$(VENV)/bin/cavatar stream --source 'sim://?people=2&seed=7' --seconds 10
@@ -41,6 +42,7 @@ bench: test-deps
 	$(PY) bench/sim_sensor.py
 	$(PY) bench/sim_contact.py
 	$(PY) bench/scene_pipeline.py
+	$(PY) bench/calibration_runtime.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

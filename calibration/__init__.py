@@ -2,5 +2,6 @@
 
 from calibration.apply import Applied, Applier
 from calibration.file import FAULT, UNUSABLE, Calibration, CalibrationError, Curve
+from calibration.runtime import CalibratedFrames
 
-__all__ = ["Applied", "Applier", "Calibration", "CalibrationError", "Curve", "FAULT", "UNUSABLE"]
+__all__ = ["Applied", "Applier", "CalibratedFrames", "Calibration", "CalibrationError", "Curve", "FAULT", "UNUSABLE"]
