@@ -8,9 +8,8 @@ decoding, frame assembly, reconnection — is shared (:mod:`edge.sources.carpet`
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
-from typing import Any, Callable
-from urllib.parse import parse_qsl, urlsplit
+
+from edge.urls import Option, parse_bool, parse_url  # noqa: F401  (re-exported for the scheme modules)
 
 
 class SourceError(Exception):
@@ -50,40 +49,3 @@ class Link(ABC):
 
     def describe(self) -> str:
         return type(self).__name__
-
-
-@dataclass(frozen=True)
-class Option:
-    """One query-string option of a source URL."""
-
-    parse: Callable[[str], Any]
-    default: Any
-    doc: str
-
-
-def parse_bool(text: str) -> bool:
-    if text.lower() in ("1", "true", "yes", "on"):
-        return True
-    if text.lower() in ("0", "false", "no", "off"):
-        return False
-    raise ValueError(f"expected 0/1, got {text!r}")
-
-
-def parse_url(url: str, scheme: str, form: str, options: dict[str, Option]) -> tuple[str, dict[str, Any]]:
-    """Split ``url`` into its location (netloc + path) and typed options.
-
-    Unknown or malformed options are a ValueError that quotes ``form`` and lists the
-    accepted options with their meaning.
-    """
-    parts = urlsplit(url)
-    location = parts.netloc + parts.path
-    accepted = "; ".join(f"{k} ({o.doc}, default {o.default})" for k, o in options.items()) or "none"
-    values = {k: o.default for k, o in options.items()}
-    for key, raw in parse_qsl(parts.query, keep_blank_values=True):
-        if key not in options:
-            raise ValueError(f"{scheme}:// source has no option {key!r}. Form: {form}. Options: {accepted}")
-        try:
-            values[key] = options[key].parse(raw)
-        except ValueError as exc:
-            raise ValueError(f"{scheme}:// option {key}={raw!r} is not valid ({exc}). Form: {form}") from None
-    return location, values

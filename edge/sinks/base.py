@@ -1,0 +1,138 @@
+"""What every sink is: a small base class, its counters, and URL option parsing.
+
+A sink publishes body records (never pressure). Every ``publish_bodies`` goes through
+:func:`edge.record.check_record` first, so a sink accepts only records shaped like the
+ones :mod:`edge.record` builds; anything else (an extra ``pressure_kpa`` key, a NaN) is a
+:class:`edge.record.RecordError` and nothing is written.
+
+Counters (``stats()``): ``sent`` records delivered (QoS 0: written to the socket; QoS ≥ 1:
+acknowledged; files: written), ``dropped`` records known lost (queue full, disconnected
+QoS 0, spool overflow, write errors), ``queued`` records waiting in memory now,
+``spooled`` records waiting on disk now, ``errors`` failures seen (connect, write),
+``refused`` records refused by the privacy/structure check, ``lag_ms``/``lag_ms_max``
+median/max over the last 256 records of publish call → delivered.
+"""
+
+from __future__ import annotations
+
+import statistics
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections import deque
+from typing import Any, Mapping, Sequence
+
+from edge.record import RecordError, check_record, check_telemetry, dumps
+from edge.urls import Option, parse_bool, parse_url
+
+__all__ = ["Sink", "SinkError", "Counters", "Option", "parse_bool", "parse_sink_url"]
+
+
+class SinkError(Exception):
+    """A sink cannot be opened or used; the message says what to do."""
+
+
+def parse_sink_url(url: str, scheme: str, form: str, options: dict[str, Option]) -> tuple[str, dict[str, Any]]:
+    """:func:`edge.urls.parse_url` for sinks (same typed options, same errors, says "sink")."""
+    return parse_url(url, scheme, form, options, kind="sink")
+
+
+class Counters:
+    """Thread-safe counters and a lag window, shared by every sink."""
+
+    FIELDS = ("sent", "dropped", "errors", "refused")
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.values = dict.fromkeys(self.FIELDS, 0)
+        self._lags: deque[float] = deque(maxlen=256)
+
+    def add(self, name: str, n: int = 1) -> None:
+        with self._lock:
+            self.values[name] = self.values.get(name, 0) + n
+
+    def delivered(self, lag_s: float | None = None, n: int = 1) -> None:
+        with self._lock:
+            self.values["sent"] += n
+            if lag_s is not None:
+                self._lags.append(lag_s * 1000.0)
+
+    def snapshot(self) -> dict[str, Any]:
+        with self._lock:
+            out: dict[str, Any] = dict(self.values)
+            lags = list(self._lags)
+        out["lag_ms"] = round(statistics.median(lags), 3) if lags else None
+        out["lag_ms_max"] = round(max(lags), 3) if lags else None
+        return out
+
+
+class Sink(ABC):
+    """Base of every sink. Subclasses implement ``_write_bodies`` and ``close``; the rest is optional."""
+
+    scheme: str = ""
+
+    def __init__(self, device: str) -> None:
+        self.device = device
+        self.counters = Counters()
+        self.closed = False
+
+    # -- the API the runtime uses ---------------------------------------------------------
+
+    def publish_bodies(self, record: Mapping) -> None:
+        """Publish one ``cavatar.bodies/1`` record. RecordError (nothing published) if it is not one."""
+        try:
+            check_record(record)
+            if record["device"] != self.device:
+                raise RecordError(f"record device {record['device']!r} is not this sink's device {self.device!r}")
+            line = dumps(record)
+        except RecordError:
+            self.counters.add("refused")
+            raise
+        if self.closed:
+            raise SinkError(f"{self.scheme}:// sink is closed")
+        self._write_bodies(record, line, time.monotonic())
+
+    def publish_info(self, info: Mapping) -> None:
+        """Retained device information (model, versions, calibration age, counters). No arrays, no pressure."""
+        try:
+            check_telemetry(dict(info), "info")
+        except RecordError:
+            self.counters.add("refused")
+            raise
+        self._write_info(dict(info))
+
+    def publish_status(self, online: bool) -> None:
+        """Availability: True → "online", False → "offline" (close() publishes "offline" itself)."""
+
+    def publish_presence(self, count: int, activities: Sequence[str]) -> None:
+        """Low-rate derived state: how many people and what they do (one activity per person)."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Deliver what can be delivered within a bounded time, release everything. Idempotent."""
+
+    def stats(self) -> dict[str, Any]:
+        out = self.counters.snapshot()
+        out.update(queued=0, spooled=0)
+        out.update(self._gauges())
+        return out
+
+    # -- for subclasses -------------------------------------------------------------------
+
+    @abstractmethod
+    def _write_bodies(self, record: Mapping, line: str, t_call: float) -> None: ...
+
+    def _write_info(self, info: dict) -> None:
+        pass
+
+    def _gauges(self) -> dict[str, Any]:
+        return {}
+
+    def describe(self) -> str:
+        return f"{self.scheme}://"
+
+    def __enter__(self) -> "Sink":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,249 @@
+"""jsonl:// — body records as JSON lines in a file, rotated; ``jsonl:-`` writes them to stdout.
+
+    jsonl:///var/lib/cavatar/bodies.jsonl?rotate_mb=100&keep=10
+    jsonl://runs/bodies.jsonl          (relative path; parent folders are created)
+    jsonl:-                            (standard output, e.g. piped into jq)
+
+One ``cavatar.bodies/1`` record per line (nothing else: every line validates against the
+one schema). ``publish_info`` writes ``<stem>.info.json`` beside the file (atomically);
+status and presence are not written.
+
+Flush policy
+- ``flush_ms=0`` (default): each record is written with one ``write()`` as it is published,
+  so a reader (``tail -f``) sees it at once and a crash of the process loses nothing.
+- ``flush_ms=N``: records gather in memory and are written together once the oldest has
+  waited N ms. The check runs at each publish (the runtime publishes at least a
+  heartbeat per frame), and at ``flush()``/``close()``; a crash loses at most N ms.
+- fsync: on rotation and on close, not per record (SD cards wear out); a power cut can
+  lose what the kernel had not yet written, never produce a half line (below).
+
+Never a half-written line: records are written only as whole lines; a write that fails
+part-way is cut back to the last whole line; and a file opened for appending that ends
+in a torn line (the machine died mid-write) has that torn tail cut off first, logged and
+counted in ``stats()['repaired']``.
+
+Rotation: when the next write would pass ``rotate_mb`` or the file is older than
+``rotate_s`` (since this process opened it), the file is fsynced, renamed to
+``<stem>-<UTC time>.jsonl`` and a new one started; ``keep`` rotated files are kept.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any, Mapping
+from urllib.parse import unquote
+
+from edge.record import dumps
+from edge.sinks.base import Option, Sink, SinkError, parse_sink_url
+
+log = logging.getLogger(__name__)
+
+SCHEME = "jsonl"
+FORM = "jsonl:///path/bodies.jsonl?rotate_mb=100&rotate_s=0&keep=10&flush_ms=0 or jsonl:- (stdout)"
+
+
+def _at_least_zero(kind):
+    def parse(text: str):
+        value = kind(text)
+        if value < 0:
+            raise ValueError("must be >= 0")
+        return value
+    return parse
+
+
+OPTIONS = {
+    "rotate_mb": Option(_at_least_zero(float), 100.0, "start a new file before this size in MB; 0: never"),
+    "rotate_s": Option(_at_least_zero(float), 0.0, "start a new file when this one is older than this, seconds; 0: never"),
+    "keep": Option(_at_least_zero(int), 10, "rotated files kept, oldest deleted first; 0: keep all"),
+    "flush_ms": Option(_at_least_zero(float), 0.0, "0: write every record at once; N: write gathered records once the oldest waited N ms"),
+}
+STDOUT_OPTIONS = {"flush_ms": OPTIONS["flush_ms"]}
+
+
+def open_sink(url: str, device: str, **kwargs: Any) -> "JsonlSink":
+    if url.startswith("jsonl:-") or url.startswith("jsonl://-"):
+        _, opts = parse_sink_url(url, SCHEME, FORM, STDOUT_OPTIONS)
+        return JsonlSink(None, device, flush_ms=opts["flush_ms"], **kwargs)
+    location, opts = parse_sink_url(url, SCHEME, FORM, OPTIONS)
+    location = unquote(location)
+    if not location or location.endswith("/"):
+        raise ValueError(f"jsonl:// needs a file path. Form: {FORM}")
+    return JsonlSink(Path(location), device, **opts, **kwargs)
+
+
+class JsonlSink(Sink):
+    scheme = SCHEME
+
+    def __init__(self, path: Path | None, device: str, rotate_mb: float = 100.0, rotate_s: float = 0.0,
+                 keep: int = 10, flush_ms: float = 0.0) -> None:
+        super().__init__(device)
+        self.path = path
+        self.rotate_bytes = int(rotate_mb * 1e6)
+        self.rotate_s = rotate_s
+        self.keep = keep
+        self.flush_ms = flush_ms
+        self._lock = threading.Lock()
+        self._buf: list[bytes] = []
+        self._t_calls: list[float] = []
+        self._fd: int | None = None
+        self._size = 0
+        self._opened = 0.0
+        self.rotations = 0
+        self.counters.add("repaired", 0)
+        if path is not None:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                self._open()
+            except OSError as exc:
+                raise SinkError(f"jsonl:// cannot write {str(path)!r}: {exc}") from None
+
+    def describe(self) -> str:
+        return f"jsonl:{'-' if self.path is None else '//' + str(self.path)}"
+
+    # -- files ----------------------------------------------------------------------------
+
+    def _open(self) -> None:
+        assert self.path is not None
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
+        size = os.fstat(fd).st_size
+        if size:
+            size = self._repair(fd, size)
+        self._fd, self._size, self._opened = fd, size, time.monotonic()
+
+    def _repair(self, fd: int, size: int) -> int:
+        """Cut a torn last line (no newline at the end); return the new size."""
+        if os.pread(fd, 1, size - 1) == b"\n":
+            return size
+        end = size
+        while end > 0:
+            start = max(0, end - 65536)
+            chunk = os.pread(fd, end - start, start)
+            nl = chunk.rfind(b"\n")
+            if nl >= 0:
+                end = start + nl + 1
+                break
+            end = start
+        os.ftruncate(fd, end)
+        log.warning("jsonl:// %s ended in a torn line (%d bytes): cut off", self.path, size - end)
+        self.counters.add("repaired")
+        return end
+
+    def _rotate(self) -> None:
+        assert self.path is not None and self._fd is not None
+        os.fsync(self._fd)
+        os.close(self._fd)
+        self._fd = None
+        stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + f".{int(time.time() * 1000) % 1000:03d}Z"
+        target = self.path.with_name(f"{self.path.stem}-{stamp}{self.path.suffix}")
+        n = 1
+        while target.exists():
+            target = self.path.with_name(f"{self.path.stem}-{stamp}-{n}{self.path.suffix}")
+            n += 1
+        os.replace(self.path, target)
+        self.rotations += 1
+        self._open()
+        if self.keep:
+            for old in self.rotated_files()[: -self.keep]:
+                old.unlink(missing_ok=True)
+
+    def rotated_files(self) -> list[Path]:
+        """Rotated files, oldest first."""
+        if self.path is None:
+            return []
+        return sorted(self.path.parent.glob(f"{self.path.stem}-*{self.path.suffix}"))
+
+    # -- writing --------------------------------------------------------------------------
+
+    def _write_bodies(self, record: Mapping, line: str, t_call: float) -> None:
+        with self._lock:
+            self._buf.append(line.encode() + b"\n")
+            self._t_calls.append(t_call)
+            if self.flush_ms <= 0 or (time.monotonic() - self._t_calls[0]) * 1000.0 >= self.flush_ms:
+                self._flush_locked()
+
+    def flush(self, timeout_s: float = 5.0) -> bool:
+        """Write whatever is gathered now."""
+        with self._lock:
+            self._flush_locked()
+        return True
+
+    def _flush_locked(self) -> None:
+        if not self._buf:
+            return
+        data = b"".join(self._buf)
+        n, t_calls = len(self._buf), self._t_calls
+        self._buf, self._t_calls = [], []
+        try:
+            if self.path is None:
+                sys.stdout.write(data.decode())
+                sys.stdout.flush()
+            else:
+                self._maybe_rotate(len(data))
+                self._write_whole(data)
+        except (OSError, ValueError) as exc:  # disk full, stdout closed: count, log, keep going
+            self.counters.add("errors")
+            self.counters.add("dropped", n)
+            log.error("jsonl:// %s: %d records not written: %s", self.describe(), n, exc)
+            return
+        now = time.monotonic()
+        for t in t_calls:
+            self.counters.delivered(now - t)
+
+    def _maybe_rotate(self, incoming: int) -> None:
+        too_big = self.rotate_bytes and self._size and self._size + incoming > self.rotate_bytes
+        too_old = self.rotate_s and time.monotonic() - self._opened >= self.rotate_s and self._size
+        if too_big or too_old:
+            self._rotate()
+
+    def _write_whole(self, data: bytes) -> None:
+        """Write whole lines or nothing: a failure part-way truncates back."""
+        assert self._fd is not None
+        before = self._size
+        view = memoryview(data)
+        try:
+            while view:
+                k = os.write(self._fd, view)
+                view = view[k:]
+        except OSError:
+            try:
+                os.ftruncate(self._fd, before)
+            except OSError:
+                pass
+            raise
+        self._size = before + len(data)
+
+    def _write_info(self, info: dict) -> None:
+        if self.path is None:
+            return
+        from edge.topics import info_payload
+
+        target = self.path.with_name(f"{self.path.stem}.info.json")
+        tmp = target.with_name(target.name + ".tmp")
+        try:
+            tmp.write_text(dumps(info_payload(self.device, info, time.time())) + "\n", encoding="utf-8")
+            os.replace(tmp, target)
+        except OSError as exc:
+            self.counters.add("errors")
+            log.error("jsonl:// cannot write %s: %s", target, exc)
+
+    def _gauges(self) -> dict[str, Any]:
+        with self._lock:
+            return {"queued": len(self._buf), "rotations": self.rotations}
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        with self._lock:
+            self._flush_locked()
+            self.closed = True
+            if self._fd is not None:
+                try:
+                    os.fsync(self._fd)
+                finally:
+                    os.close(self._fd)
+                    self._fd = None

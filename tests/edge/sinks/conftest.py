@@ -1,0 +1,56 @@
+"""A real mosquitto on 127.0.0.1 for the sink tests, a paho subscriber, and record factories.
+
+The broker runs from a tiny config in a tmp dir: a listener on a free port bound to
+127.0.0.1, anonymous or a password file, persistence in the tmp dir (so persistent
+subscriber sessions survive a broker restart). Nothing here is skipped: without
+mosquitto the fixture fails and says how to get it.
+"""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from sink_helpers import Broker, Subscriber, body_record  # noqa: E402
+
+
+@pytest.fixture
+def make_broker(tmp_path):
+    """Factory: ``make_broker(users={"cavatar": "pw"})`` → a started Broker (stopped after the test)."""
+    brokers: list[Broker] = []
+
+    def make(users: dict[str, str] | None = None, tls: dict[str, str] | None = None) -> Broker:
+        b = Broker(tmp_path / f"broker{len(brokers)}", users, tls)
+        brokers.append(b)
+        b.start()
+        return b
+
+    yield make
+    for b in brokers:
+        b.stop()
+
+
+@pytest.fixture
+def broker(make_broker):
+    return make_broker()
+
+
+@pytest.fixture
+def subscribe():
+    subs: list[Subscriber] = []
+
+    def make(port: int, topics: list[str], **kwargs) -> Subscriber:
+        s = Subscriber(port, topics, **kwargs)
+        subs.append(s)
+        return s
+
+    yield make
+    for s in subs:
+        s.close()
+
+
+@pytest.fixture
+def record():
+    return body_record
