@@ -1,0 +1,110 @@
+"""`cavatar calibrate`: the guided calibration of a carpet (live, from recordings, or on the virtual carpet).
+
+    cavatar calibrate --source serial:///dev/ttyACM0 --mass 72            # guided, live
+    cavatar calibrate --empty e.bin --walk w.bin --board b.bin --stance s.bin --holdout h.bin --mass 72
+    cavatar calibrate --sim --seed 7 --intruder standing                  # the virtual carpet acts it out
+    cavatar calibrate --work calib-work --redo board ...                  # redo one step alone
+
+Writes the calibration file (``--out``), ``<out>.png`` and ``<out>.txt`` (the report).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from edge.cli import CliError
+
+STEP_FILES = ("empty", "walk", "board", "stance", "holdout")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="calibrate a carpet: baseline, faults, gains, response curve; writes the calibration file and a report",
+        description="Walks an installer through the calibration steps (self-test, empty capture, coverage walk, "
+        "board equilibration, known-weight poses, validation), from a live board (--source), from recordings "
+        "(--empty/--walk/--board/--stance/--holdout) or on the virtual carpet (--sim). The session is saved to "
+        "--work after every step: running again resumes, --redo STEP redoes one step alone.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--source", help="live board URL, e.g. serial:///dev/ttyACM0 (guided, with prompts)")
+    src.add_argument("--sim", action="store_true", help="the virtual carpet acts out the session")
+    for step in STEP_FILES:
+        p.add_argument(f"--{step}", metavar="FILE", help=f"recording of the {step} step (.bin from `cavatar record`, or .npz)")
+    p.add_argument("--mass", type=float, help="mass of the person doing the poses, kg")
+    p.add_argument("--board-mass", type=float, default=3.0, help="mass of the 60×60 cm board, kg (default 3)")
+    p.add_argument("--work", default="calibration-work", help="session folder (resumable; default ./calibration-work)")
+    p.add_argument("--redo", metavar="STEP", help="redo one step alone: self_test, empty, walk, board, stance, holdout")
+    p.add_argument("--out", default="calibration.npz", help="calibration file to write (default calibration.npz)")
+    p.add_argument("--mask", help="(H, W) bool .npy of the sensels that exist (non-rectangular carpet)")
+    p.add_argument("--shape-from-walk", action="store_true", help="mark regions never stepped on at the border as outside")
+    p.add_argument("--crosstalk-r-norm", type=float, default=0.0, help="line-loading R·g_full of the readout (0 = off)")
+    p.add_argument("--seed", type=int, default=7, help="--sim: carpet seed")
+    p.add_argument("--grid", type=int, default=96, help="--sim: sensels per side (96, 48, 32)")
+    p.add_argument("--intruder", choices=("standing", "walking", "present80"), help="--sim: someone on the carpet during the empty capture")
+    p.add_argument("--no-map", action="store_true", help="do not draw the coverage map")
+    p.set_defaults(func=run)
+
+
+def _provider(args):
+    from calibration.providers import LiveProvider, RecordingProvider, SimProvider
+
+    files = {s: getattr(args, s) for s in STEP_FILES if getattr(args, s)}
+    if args.sim:
+        from calibration.actor import Actor
+        from sim.sensor import CarpetSensor
+
+        sensor = CarpetSensor.random(args.seed, grid=args.grid, faults=True)
+        print(f"virtual carpet: {sensor!r}")
+        if args.mass is None:
+            args.mass = 72.0
+        return SimProvider(Actor(sensor, mass_kg=args.mass, seed=args.seed), args.intruder, live_map=not args.no_map)
+    if args.source:
+        if args.mass is None:
+            args.mass = float(input("The person doing the poses: mass in kg? "))
+        return LiveProvider(args.source)
+    if files:
+        return RecordingProvider(files)
+    return None
+
+
+def run(args: argparse.Namespace) -> int:
+    from calibration.file import CalibrationError
+    from calibration.report import write_report
+    from calibration.session import STEPS, Options, Session, SessionError
+    from calibration.terminal import render_map
+
+    provider = _provider(args)
+    opts = Options(mass_kg=args.mass, board_mass_kg=args.board_mass, crosstalk_r_norm=args.crosstalk_r_norm,
+                   shape_from_walk=args.shape_from_walk, mask_path=args.mask)
+    session = Session(Path(args.work), opts)
+    if provider is None and not session.done:
+        raise CliError("give a source: --source URL (live), --sim, or recordings (--empty FILE --walk FILE …)")
+    if args.redo and args.redo not in STEPS:
+        raise CliError(f"--redo takes one of {', '.join(STEPS)}, not {args.redo!r}")
+    try:
+        if provider is not None:
+            steps = STEPS if not isinstance(provider, _recording_type()) else tuple(
+                s for s in STEPS if s == "self_test" and args.empty or getattr(args, s, None))
+            session.run(provider, steps=steps, redo=args.redo)
+        cal, val = session.finish(args.out)
+    except (SessionError, CalibrationError, FileNotFoundError, ValueError) as exc:
+        raise CliError(f"{exc} (the session so far is kept in {args.work}; fix it and run again, or --redo STEP)") from None
+    results = session.all_results()
+    out = Path(args.out)
+    png, txt = out.with_suffix(".png"), out.with_suffix(".txt")
+    write_report(cal, results, val, png, txt)
+    w = results.get("walk")
+    if w is not None and not args.no_map:
+        print(render_map(w.arrays["coverage"] > 0, title="coverage map (x = masked)", faults=~cal.usable))
+    print(val.summary())
+    print(f"wrote {out} (sha256 {cal.sha256[:12]}), report {png} and {txt}")
+    return 0 if val.ok else 1
+
+
+def _recording_type():
+    from calibration.providers import RecordingProvider
+
+    return RecordingProvider
