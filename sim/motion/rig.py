@@ -1,0 +1,540 @@
+"""Rotations, forward kinematics, two-bone IK and ground contact for one body shape.
+
+Everything here is batched over frames (leading axis T) and float64. A ``Rig`` is the
+body model evaluated for one shape (betas): its rest joints with the pelvis at the
+origin, the vertex sets of the contact parts, and ``ground`` — the solver that turns
+local joint rotations plus a contact schedule into world ``pose_aa`` and ``transl_m``
+(see ``Rig.ground``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from edge.body import SMPL_PARENTS, BodyModel
+from edge.body import lbs
+
+J = {name: i for i, name in enumerate((
+    "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
+    "left_ankle", "right_ankle", "spine3", "left_foot", "right_foot", "neck",
+    "left_collar", "right_collar", "head", "left_shoulder", "right_shoulder",
+    "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hand", "right_hand",
+))}
+
+# Contact parts (columns of a contact schedule) and the joints whose vertices form them.
+CONTACT_PARTS = ("left_foot", "right_foot", "left_hand", "right_hand", "buttocks", "back")
+LF, RF, LH, RH, BUTT, BACK = range(6)
+SETTLE = 6  # anchor code: the pelvis moves between resting on the feet and on the buttocks (both feet locked)
+_PART_JOINTS = (
+    (J["left_ankle"], J["left_foot"]),
+    (J["right_ankle"], J["right_foot"]),
+    (J["left_wrist"], J["left_hand"]),
+    (J["right_wrist"], J["right_hand"]),
+    (J["pelvis"], J["left_hip"], J["right_hip"]),
+    (J["spine1"], J["spine2"], J["spine3"], J["left_collar"], J["right_collar"]),
+)
+# Lock point of each part (a joint): feet lock the ball of the foot, hands the wrist.
+LOCK_JOINT = (J["left_foot"], J["right_foot"], J["left_wrist"], J["right_wrist"], J["pelvis"], J["spine2"])
+# Limb chains for two-bone IK: (root, hinge, end, hinge axis in the hinge's local frame).
+_CHAINS = {
+    LF: (J["left_hip"], J["left_knee"], J["left_ankle"], np.array([1.0, 0, 0])),
+    RF: (J["right_hip"], J["right_knee"], J["right_ankle"], np.array([1.0, 0, 0])),
+    LH: (J["left_shoulder"], J["left_elbow"], J["left_wrist"], np.array([0, -1.0, 0])),
+    RH: (J["right_shoulder"], J["right_elbow"], J["right_wrist"], np.array([0, 1.0, 0])),
+}
+UPRIGHT = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # +90° about x: canonical Y-up → Z-up
+
+
+# ----------------------------------------------------------------------------- rotations
+
+def euler_deg_to_matrix(e: np.ndarray) -> np.ndarray:
+    """Intrinsic x-then-y-then-z angles in degrees (..., 3) → R = Rx·Ry·Rz (..., 3, 3)."""
+    e = np.radians(np.asarray(e, dtype=np.float64))
+    cx, cy, cz = np.cos(e[..., 0]), np.cos(e[..., 1]), np.cos(e[..., 2])
+    sx, sy, sz = np.sin(e[..., 0]), np.sin(e[..., 1]), np.sin(e[..., 2])
+    r = np.empty(e.shape[:-1] + (3, 3))
+    r[..., 0, 0] = cy * cz
+    r[..., 0, 1] = -cy * sz
+    r[..., 0, 2] = sy
+    r[..., 1, 0] = sx * sy * cz + cx * sz
+    r[..., 1, 1] = -sx * sy * sz + cx * cz
+    r[..., 1, 2] = -sx * cy
+    r[..., 2, 0] = -cx * sy * cz + sx * sz
+    r[..., 2, 1] = cx * sy * sz + sx * cz
+    r[..., 2, 2] = cx * cy
+    return r
+
+
+def rot_z(angle_rad: np.ndarray) -> np.ndarray:
+    a = np.asarray(angle_rad, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    r = np.zeros(a.shape + (3, 3))
+    r[..., 0, 0], r[..., 0, 1], r[..., 1, 0], r[..., 1, 1], r[..., 2, 2] = c, -s, s, c, 1.0
+    return r
+
+
+def rot_x(angle_rad: np.ndarray) -> np.ndarray:
+    a = np.asarray(angle_rad, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    r = np.zeros(a.shape + (3, 3))
+    r[..., 0, 0], r[..., 1, 1], r[..., 1, 2], r[..., 2, 1], r[..., 2, 2] = 1.0, c, -s, s, c
+    return r
+
+
+def matrix_to_rotvec(r: np.ndarray) -> np.ndarray:
+    shape = r.shape[:-2]
+    return Rotation.from_matrix(r.reshape(-1, 3, 3)).as_rotvec().reshape(shape + (3,))
+
+
+def _skew(v):
+    z = np.zeros(v.shape[:-1])
+    return np.stack([
+        np.stack([z, -v[..., 2], v[..., 1]], -1),
+        np.stack([v[..., 2], z, -v[..., 0]], -1),
+        np.stack([-v[..., 1], v[..., 0], z], -1),
+    ], -2)
+
+
+def min_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking direction a to direction b, (N,3) → (N,3,3)."""
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    v = np.cross(a, b)
+    c = np.sum(a * b, -1)
+    k = _skew(v)
+    return np.eye(3) + k + (k @ k) / np.maximum(1.0 + c, 1e-9)[..., None, None]
+
+
+def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotation about one fixed unit axis (3,) by angles (N,) → (N,3,3)."""
+    k = _skew(np.broadcast_to(axis, angle.shape + (3,)))
+    s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
+
+
+def min_jerk(s: np.ndarray) -> np.ndarray:
+    """Minimum-jerk time warp of s in [0, 1] (zero velocity and acceleration at the ends)."""
+    s = np.clip(s, 0.0, 1.0)
+    return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
+
+
+# ----------------------------------------------------------------------------- the rig
+
+class Rig:
+    """One body shape: FK, vertex heights, IK and the ground-contact solve."""
+
+    def __init__(self, model: BodyModel, betas: np.ndarray):
+        self.model = model
+        self.betas = np.asarray(betas, dtype=np.float64).reshape(-1)
+        self.parents = np.asarray(SMPL_PARENTS)
+        self.levels = lbs.kinematic_levels(self.parents)
+        _, b, _ = model.prepare_inputs(np.zeros(72), self.betas, None)
+        raw_joints = lbs.shape_joints(model._j_template, model._j_shapedirs, b)[0]
+        self.rest = raw_joints - raw_joints[0]  # (24,3) rest joints, pelvis at the origin (canonical frame)
+        a = model.arrays
+        shaped = a.v_template + (a.shapedirs.reshape(-1, a.shapedirs.shape[-1]) @ b[0]).reshape(-1, 3)
+        self.rest_vertices = shaped - raw_joints[0]  # (V,3) float64, pelvis at the origin
+        self._vh = np.concatenate([self.rest_vertices, np.ones((len(shaped), 1))], 1)  # homogeneous
+        self._weights = np.asarray(a.weights, np.float64)
+        self._posedirs = None if a.posedirs is None else a.posedirs.reshape(-1, a.posedirs.shape[2]).T  # (207, 3V)
+        # Skinning as one product: vertex v's coordinate r = Σ_jk W[v,j]·vh[v,k]·A[t,j,r,k].
+        # float32: the products are ~10× below a millimetre off and twice as fast.
+        self._wvh = (self._weights[:, :, None] * self._vh[:, None, :]).reshape(len(shaped), -1).T.astype(np.float32)  # (J·4, V)
+        dominant = np.argmax(a.weights, axis=1)
+        self.part_vertices = [np.flatnonzero(np.isin(dominant, joints)) for joints in _PART_JOINTS]
+        # A flat foot (canonical orientation upright): height of the ball joint above the sole.
+        up = np.tile(np.eye(3), (1, 24, 1, 1))
+        up[0, 0] = UPRIGHT
+        g_rot, g_t = self.fk(up)
+        z = self.vertex_z(up)[0]
+        self.ball_height = {p: float(g_t[0, LOCK_JOINT[p], 2] - z[self.part_vertices[p]].min()) for p in (LF, RF)}
+        self.stand_height = float(-z.min())  # pelvis height standing in the rest pose
+        self.foot_vec = {p: self.rest[LOCK_JOINT[p]] - self.rest[_CHAINS[p][2]] for p in (LF, RF)}  # ankle → ball, canonical
+        self.reach = {q: float(np.linalg.norm(self.rest[_CHAINS[q][1]] - self.rest[_CHAINS[q][0]])
+                               + np.linalg.norm(self.rest[_CHAINS[q][2]] - self.rest[_CHAINS[q][1]])) for q in _CHAINS}
+
+    # FK on local rotation matrices (T,24,3,3), joint 0 already the world orientation.
+    def fk(self, local: np.ndarray):
+        rest = np.broadcast_to(self.rest, (local.shape[0],) + self.rest.shape)
+        return lbs.forward_kinematics(local, rest, self.levels)
+
+    def _skin_rows(self, local, g_rot, g_t, rows):
+        """Rows (coordinates) of the skinned vertices, pelvis at the origin: (T,V,len(rows))."""
+        if g_rot is None:
+            g_rot, g_t = self.fk(local)
+        t = g_t - (g_rot @ self.rest[None, :, :, None])[..., 0]
+        a = np.concatenate([g_rot[:, :, rows, :], t[:, :, rows, None]], -1)  # (T,J,R,4)
+        if self._posedirs is None:
+            n, nj, nr = a.shape[:3]
+            flat = np.ascontiguousarray(a.transpose(0, 2, 1, 3), dtype=np.float32).reshape(n * nr, nj * 4)
+            return (flat @ self._wvh).astype(np.float64).reshape(n, nr, -1).transpose(0, 2, 1)
+        per = np.einsum("vj,tjrk->tvrk", self._weights, a, optimize=True)
+        feat = (local[:, 1:] - np.eye(3)).reshape(len(local), -1)
+        v = self.rest_vertices[None] + (feat @ self._posedirs).reshape(len(local), -1, 3)
+        return np.einsum("tvrk,tvk->tvr", per[..., :3], v) + per[..., 3]
+
+    def vertex_z(self, local: np.ndarray, g=None) -> np.ndarray:
+        """Height of every vertex above the pelvis (T,V)."""
+        g_rot, g_t = (None, None) if g is None else g
+        return self._skin_rows(local, g_rot, g_t, [2])[..., 0]
+
+    def vertices(self, local: np.ndarray, transl: np.ndarray | None = None) -> np.ndarray:
+        v = self._skin_rows(local, None, None, [0, 1, 2])
+        return v if transl is None else v + transl[:, None]
+
+    # ------------------------------------------------------------------ IK
+    def two_bone_ik(self, local: np.ndarray, part: int, frames: np.ndarray, target: np.ndarray, g=None) -> None:
+        """Move the end joint of a limb (ankle or wrist) onto target (N,3) (pelvis-relative world)
+        in the given frames, in place: hinge angle from the distance, then the smallest swing at
+        the root joint (hip or shoulder). g: optional FK (g_rot, g_t) of ``local[frames]``
+        (only the root's parent chain is used, which this does not change)."""
+        if len(frames) == 0:
+            return
+        a, b, c, k = _CHAINS[part]
+        g_rot, g_t = self.fk(local[frames]) if g is None else g
+        u = self.rest[b] - self.rest[a]
+        v = self.rest[c] - self.rest[b]
+        lu, lv = np.linalg.norm(u), np.linalg.norm(v)
+        d = target - g_t[:, a]
+        dist = np.clip(np.linalg.norm(d, axis=1), abs(lu - lv) + 1e-3, (lu + lv) * 0.9995)
+        uk, vk = u @ k, v @ k
+        aa = u @ v - uk * vk
+        bb = u @ np.cross(k, v)
+        cc = 0.5 * (dist**2 - lu**2 - lv**2) - uk * vk
+        rho = np.hypot(aa, bb)
+        theta = np.arctan2(bb, aa) + np.arccos(np.clip(cc / rho, -1.0, 1.0))
+        r_hinge = axis_rotation(k, theta)
+        local[frames, b] = r_hinge
+        w = u + (r_hinge @ v)  # (N,3) end relative to root, in the root's own frame
+        g_parent = g_rot[:, self.parents[a]]
+        want = np.einsum("nji,nj->ni", g_parent, d)  # G_parent^T d
+        have = np.einsum("nij,nj->ni", local[frames, a], w)
+        local[frames, a] = min_rotation(have, want) @ local[frames, a]
+
+    # ------------------------------------------------------------------ ground contact
+    def ground(self, local: np.ndarray, contact: np.ndarray, anchor: np.ndarray, heel_deg: np.ndarray,
+               foot_yaw: np.ndarray, hand_rot: np.ndarray | None = None, start_xy=(0.0, 0.0),
+               iterations: int = 3) -> np.ndarray:
+        """Place a posed sequence on the floor; returns transl (T,3) (the pelvis).
+
+        local: (T,24,3,3) local rotations, joint 0 the world orientation (modified in place:
+        ankles, feet, wrists and limb chains get contact corrections);
+        contact: (T,6) bool schedule over ``CONTACT_PARTS``; anchor: (T,) the part that
+        carries the root (a contact part in that frame, or SETTLE); heel_deg: (T,2) heel
+        raise of each foot while in contact (0 flat, ~70 on the toes); foot_yaw: (T,2) world
+        yaw of each foot (rad) used when it touches down; hand_rot: optional (T,2,3,3) world
+        orientation of the wrists while the hands touch.
+
+        1. Lock points: a foot's ball (flat at its touch-down yaw, heel raised by heel_deg),
+           a hand's wrist (and its orientation), the buttocks'/back's pelvis/spine joint.
+           The anchor part carries the root: transl is the locked point minus its
+           pelvis-relative position; a limb touching down is locked where the posed body
+           puts it, at floor height. Jumps of transl where the anchor changes are spread
+           over a few frames.
+        2. Repeat: lower the pelvis (smoothly) where a locked limb cannot reach its lock;
+           put every locked limb (the anchor's too) on its lock by two-bone IK; raise the
+           body where any vertex is below the floor.
+        """
+        n = len(local)
+        contact = np.asarray(contact, bool)
+        anchor = np.asarray(anchor)
+        heel = np.radians(heel_deg)
+        # Foot orientation: in contact flat (or on the toes) at the yaw of touch-down; in the air
+        # blended from the last lock to the next one, so a foot never snaps on lift-off.
+        foot_rot = {}
+        for p in (LF, RF):
+            yaw = _hold_at_span_start(contact[:, p], foot_yaw[:, p])
+            yaw, hl = _bridge_gaps(contact[:, p], yaw), _bridge_gaps(contact[:, p], heel[:, p].copy())
+            foot_rot[p] = rot_z(yaw) @ UPRIGHT @ rot_x(hl)
+        toe_rot = {p: rot_x(-0.8 * np.maximum(heel[:, p], 0.0)) for p in (LF, RF)}
+        wrist_rot = {}
+        if hand_rot is not None:
+            for p in (LH, RH):
+                if contact[:, p].any():
+                    wrist_rot[p] = hand_rot[_span_start_index(contact[:, p]), p - LH]
+        blend = {p: _near_contact_weight(contact[:, p], 4) for p in (LH, RH)}
+        feet_used = [p for p in (LF, RF) if contact[:, p].any()]
+
+        def orient_ends(frames, g_rot):
+            """Feet and wrists to their world orientations in `frames` (index array); g_rot the FK of local[frames]."""
+            for p in feet_used:
+                ankle = _CHAINS[p][2]
+                local[frames, ankle] = np.swapaxes(g_rot[:, self.parents[ankle]], -1, -2) @ foot_rot[p][frames]
+                local[frames, LOCK_JOINT[p]] = toe_rot[p][frames]  # toes stay on the floor
+            for p in wrist_rot:
+                sel = blend[p][frames] > 0
+                if not sel.any():
+                    continue
+                f = frames[sel]
+                wrist = _CHAINS[p][2]
+                want = np.swapaxes(g_rot[sel, self.parents[wrist]], -1, -2) @ wrist_rot[p][f]
+                local[f, wrist] = _slerp_mats(local[f, wrist], want, blend[p][f])
+
+        all_frames = np.arange(n)
+        g = self.fk(local)
+        orient_ends(all_frames, g[0])
+        self._rest_on_back(local, contact)
+        g = self.fk(local)
+        z = self.vertex_z(local, g)
+        part_low = np.stack([z[:, idx].min(1) for idx in self.part_vertices], 1)  # (T,6)
+        lock_local = g[1][:, list(LOCK_JOINT)]  # (T,6,3)
+
+        # ---- 1. the anchor chain
+        transl = np.zeros((n, 3))
+        limbs = (LF, RF, LH, RH)
+        span_of = {q: _span_start_index(contact[:, q]) for q in limbs}
+        touch = {q: np.flatnonzero(contact[:, q] & ~np.r_[False, contact[:-1, q]]) for q in limbs}
+
+        def floor_z(q, t0):
+            if q in (LF, RF) and heel[t0, q] == 0:
+                return self.ball_height[q]
+            return lock_local[t0, q, 2] - part_low[t0, q]
+
+        starts = np.flatnonzero(np.r_[True, anchor[1:] != anchor[:-1]])
+        ends = np.r_[starts[1:], n]
+        w_prev = None
+        locks = {}  # (limb, first frame of its contact span) → locked world point
+        for s, e in zip(starts, ends):
+            p = int(anchor[s])
+            settle = p == SETTLE
+            if settle:  # xy follow the left foot's lock; z blends between feet and buttocks
+                p = LF
+            if w_prev is None:
+                w = np.array([start_xy[0], start_xy[1], 0.0]) + lock_local[s, p] * [1, 1, 0]  # pelvis over start_xy
+            else:
+                q, wq = w_prev
+                w = wq - lock_local[s, q] + lock_local[s, p]  # continuity of transl at the switch
+            if p in span_of and contact[s, p]:
+                key = (p, int(span_of[p][s]))
+                if key in locks:  # already locked as a non-anchor limb: keep that lock
+                    w = locks[key].copy()
+                else:
+                    w[2] = floor_z(p, s)
+                    locks[key] = w
+            seg = slice(s, e)
+            transl[seg] = w - lock_local[seg, p]
+            if p in (BUTT, BACK):
+                transl[seg, 2] = -part_low[seg, p]
+            if settle:
+                down = w_prev is None or w_prev[0] in limbs
+                ramp = min_jerk((np.arange(e - s) + 1.0) / (e - s))
+                ramp = ramp if down else 1.0 - ramp
+                transl[seg, 2] = (1 - ramp) * transl[seg, 2] + ramp * (-part_low[seg, BUTT])
+            if s >= 2:  # spread a jump at the switch over the next frames
+                jump = transl[s] - (2 * transl[s - 1] - transl[s - 2])
+                k = min(_SMOOTH, e - s)
+                fade = 1.0 - min_jerk((np.arange(k) + 1.0) / (_SMOOTH + 1.0))
+                transl[s:s + k] -= fade[:, None] * jump
+            w_prev = (p, w)
+            # Limbs touching down during this span get their locks from this placement.
+            for q in limbs:
+                if q == p:
+                    continue
+                t0s = touch[q][(touch[q] > s) & (touch[q] < e)]
+                if contact[s, q]:
+                    t0s = np.r_[span_of[q][s], t0s]
+                for t0 in t0s:
+                    t0 = int(t0)
+                    if (q, t0) not in locks:
+                        wq = transl[t0] + lock_local[t0, q]
+                        wq[2] = floor_z(q, t0)
+                        locks[(q, t0)] = wq
+
+        # Per limb: frames to solve, weights (1 in contact; hands ramp in/out) and lock targets.
+        t_idx = np.arange(n)
+        solve = {}
+        for q in limbs:
+            c = contact[:, q]
+            if not c.any():
+                continue
+            weight = blend[q] if q in blend else c.astype(float)
+            frames = np.flatnonzero(weight > 0)
+            prev_c = np.maximum.accumulate(np.where(c, t_idx, -1))
+            next_c = np.minimum.accumulate(np.where(c, t_idx, n)[::-1])[::-1]
+            f = frames
+            near = np.where(c[f], f, np.where((f - prev_c[f] <= next_c[f] - f) & (prev_c[f] >= 0), prev_c[f], next_c[f]))
+            near = np.clip(near, 0, n - 1)
+            span0 = span_of[q][near]
+            keys, inv = np.unique(span0, return_inverse=True)
+            table = np.stack([locks[(q, int(k0))] if (q, int(k0)) in locks else transl[k0] + lock_local[k0, q] for k0 in keys])
+            target = table[inv]
+            if q in (LF, RF):  # the ball's height follows the heel raise (sole or toes on the floor)
+                on = c[frames]
+                zf = np.where(heel[frames, q] > 0, lock_local[frames, q, 2] - part_low[frames, q], self.ball_height[q])
+                # One ball height per contact span, the middle of what the heel raise asks for: the
+                # ball stays put while the toes or the sole stay within a few mm of the floor.
+                sid = np.unique(span0[on], return_inverse=True)[1]
+                lo, hi = np.full(sid.max() + 1 if len(sid) else 0, np.inf), np.full(sid.max() + 1 if len(sid) else 0, -np.inf)
+                np.minimum.at(lo, sid, zf[on])
+                np.maximum.at(hi, sid, zf[on])
+                target[on, 2] = 0.5 * (lo + hi)[sid]
+                target = target - np.einsum("nij,j->ni", foot_rot[q][frames], self.foot_vec[q])
+            solve[q] = (frames, weight[frames], target, c[frames])
+
+        def put_limbs(g_rot, g_t):
+            """Every locked limb onto its lock (hands ramp toward it before and after contact)."""
+            for q, (frames, wgt, target, on) in solve.items():
+                end = target
+                if (wgt < 1).any():
+                    native = transl[frames] + g_t[frames, _CHAINS[q][2]]
+                    end = native + wgt[:, None] * (target - native)
+                self.two_bone_ik(local, q, frames, end - transl[frames], (g_rot[frames], g_t[frames]))
+            g_rot, g_t = self.fk(local)
+            orient_ends(all_frames, g_rot)
+
+        # ---- 2. reach, IK, rest, lift
+        moved_body = 0.0
+        for it in range(iterations):
+            g_rot, g_t = self.fk(local)
+            need = np.zeros(n)
+            for q, (frames, wgt, target, on) in solve.items():
+                f = frames[on]
+                v = target[on] - (transl[f] + g_t[f, _CHAINS[q][0]])
+                r = 0.997 * self.reach[q]
+                h = np.hypot(v[:, 0], v[:, 1])
+                d = np.where(h < 0.98 * r, -v[:, 2] - np.sqrt(np.maximum(r * r - h * h, 0.0)), 0.0)  # lowering can't help a far lock
+                need[f] = np.maximum(need[f], d)
+            if need.max() > 1e-5:
+                transl[:, 2] -= _envelope(np.maximum(need, 0.0), _SMOOTH)
+            put_limbs(g_rot, g_t)
+            g = self.fk(local)
+            z = self.vertex_z(local, g) + transl[:, 2:3]
+            # A free (swinging) foot or hand that dips below the floor is raised by IK, not the body.
+            moved = np.zeros(n, bool)
+            for q in limbs:
+                free = ~contact[:, q]
+                pen = np.maximum(0.0, -z[:, self.part_vertices[q]].min(1)) * free
+                f = np.flatnonzero(pen > 1e-4)
+                if len(f):
+                    end = g[1][f, _CHAINS[q][2]] + np.outer(pen[f] + 0.002, [0.0, 0.0, 1.0])
+                    self.two_bone_ik(local, q, f, end, (g[0][f], g[1][f]))
+                    moved[f] = True
+            if moved.any():  # only the frames whose limbs moved need new vertex heights
+                f = np.flatnonzero(moved)
+                z[f] = self.vertex_z(local[f]) + transl[f, 2:3]
+            # A body resting on the buttocks or the back stays on them after the IK moved the thighs.
+            # The change fades out over a few frames around those spans (no jump of the pelvis).
+            rest = np.isin(anchor, (BUTT, BACK))
+            if rest.any():
+                adj = np.zeros(n)
+                for p in (BUTT, BACK):
+                    rows = np.flatnonzero(anchor == p)
+                    if len(rows):
+                        adj[rows] = z[np.ix_(rows, self.part_vertices[p])].min(1)
+                t_idx = np.arange(n)
+                prev_r = np.maximum.accumulate(np.where(rest, t_idx, -1))
+                next_r = np.minimum.accumulate(np.where(rest, t_idx, n)[::-1])[::-1]
+                nearest = np.where((prev_r >= 0) & ((t_idx - prev_r <= next_r - t_idx) | (next_r >= n)), prev_r, next_r)
+                adj = adj[np.clip(nearest, 0, n - 1)] * _near_contact_weight(rest, _SMOOTH)
+                moved_body = max(moved_body, float(np.abs(adj).max()))
+                transl[:, 2] -= adj
+                z -= adj[:, None]
+            # A locked foot or hand may press up to _SINK into the floor (skinning at a sharply bent
+            # ankle or wrist) without lifting the whole body off its other contacts.
+            for q in limbs:
+                rows = np.flatnonzero(contact[:, q])
+                if len(rows):
+                    z[np.ix_(rows, self.part_vertices[q])] += _SINK
+            low = z.min(1)
+            lift = np.maximum(0.0, -low)
+            transl[:, 2] += lift
+            moved_body = max(moved_body, float(lift.max()), float(need.max()))
+            if moved_body < 1e-4:
+                break
+            if it < iterations - 1:
+                moved_body = 0.0
+        if moved_body >= 1e-4:  # the body moved after the last IK: put the limbs back on their locks
+            put_limbs(*self.fk(local))
+        return transl
+
+    def _rest_on_back(self, local: np.ndarray, contact: np.ndarray) -> None:
+        """Where the back and the buttocks are both scheduled on the floor, pitch the root so
+        that they are equally low (ramped in and out over a few frames)."""
+        wgt = _near_contact_weight(contact[:, BACK] & contact[:, BUTT], 4)
+        f = np.flatnonzero(wgt > 0)
+        if len(f) == 0:
+            return
+        for _ in range(4):
+            g = self.fk(local[f])
+            z = self.vertex_z(local[f], g)
+            dz = z[:, self.part_vertices[BACK]].min(1) - z[:, self.part_vertices[BUTT]].min(1)
+            d = g[1][:, LOCK_JOINT[BACK]] - g[1][:, LOCK_JOINT[BUTT]]
+            d[:, 2] = 0.0
+            length = np.maximum(np.linalg.norm(d, axis=1), 0.05)
+            axis = np.cross(np.array([0.0, 0.0, 1.0]), d / length[:, None])
+            axis /= np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-9)
+            angle = np.arctan2(dz, length) * wgt[f]
+            rot = Rotation.from_rotvec(axis * angle[:, None]).as_matrix()
+            local[f, 0] = rot @ local[f, 0]
+
+
+_SMOOTH = 4  # frames over which transl corrections are spread
+_SINK = 0.008  # m a locked foot/hand may press into the floor before the body is lifted
+
+
+def _envelope(x: np.ndarray, k: int) -> np.ndarray:
+    """A smooth curve ≥ x: a running max over ±k frames, then twice a running mean over ±k/2
+    (piecewise quadratic: no corners, so no spikes of acceleration)."""
+    from scipy.ndimage import maximum_filter1d, uniform_filter1d
+    h = max(k // 2, 1)
+    m = maximum_filter1d(x, 4 * h + 1, mode="nearest")
+    return uniform_filter1d(uniform_filter1d(m, 2 * h + 1, mode="nearest"), 2 * h + 1, mode="nearest")
+
+
+def _span_start_index(mask: np.ndarray) -> np.ndarray:
+    """For each frame, the first frame of the run of equal values it belongs to."""
+    n = len(mask)
+    change = np.r_[True, mask[1:] != mask[:-1]]
+    idx = np.where(change, np.arange(n), 0)
+    return np.maximum.accumulate(idx)
+
+
+def _hold_at_span_start(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """values frozen at the start of each contact span (free outside contact)."""
+    out = values.copy()
+    start = _span_start_index(mask)
+    out[mask] = values[start[mask]]
+    return out
+
+
+def _bridge_gaps(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Outside the mask, interpolate (min-jerk) between the last value before and the next after."""
+    out = values.astype(np.float64).copy()
+    n = len(mask)
+    idx = np.flatnonzero(mask)
+    if len(idx) == 0:
+        return out
+    gaps = np.flatnonzero(~mask)
+    if len(gaps) == 0:
+        return out
+    prev_i = np.maximum.accumulate(np.where(mask, np.arange(n), -1))
+    next_i = np.minimum.accumulate(np.where(mask, np.arange(n), n)[::-1])[::-1]
+    g = gaps
+    a, b = prev_i[g], next_i[g]
+    va = np.where(a >= 0, out[np.clip(a, 0, n - 1)], out[np.clip(b, 0, n - 1)])
+    vb = np.where(b < n, out[np.clip(b, 0, n - 1)], va)
+    s = np.where((a >= 0) & (b < n), (g - a) / np.maximum(b - a, 1), 0.0)
+    out[g] = va + (vb - va) * min_jerk(s)
+    return out
+
+
+def _near_contact_weight(mask: np.ndarray, k: int) -> np.ndarray:
+    """1 in contact, ramping to 0 over k frames before and after each contact span."""
+    n = len(mask)
+    idx = np.flatnonzero(mask)
+    if len(idx) == 0:
+        return np.zeros(n)
+    t = np.arange(n)
+    prev_i = np.maximum.accumulate(np.where(mask, t, -10**9))
+    next_i = np.minimum.accumulate(np.where(mask, t, 10**9)[::-1])[::-1]
+    dist = np.minimum(t - prev_i, next_i - t).astype(float)
+    return min_jerk(np.clip(1.0 - dist / (k + 1), 0.0, 1.0))
+
+
+def _slerp_mats(r0: np.ndarray, r1: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Rotation from r0 toward r1 by fraction w, (N,3,3) each."""
+    if len(r0) == 0:
+        return r0
+    rel = Rotation.from_matrix(np.swapaxes(r0, -1, -2) @ r1).as_rotvec() * w[:, None]
+    return r0 @ Rotation.from_rotvec(rel).as_matrix()
