@@ -4,8 +4,12 @@
 
 Subjects are split 80/10/10 by subject (at least one in val and test when there are
 three or more), so test subjects are never seen in training. Each *sequence* is one
-scene: 1–3 people of one split doing activities in their own order; a sequence is one
-shard. Each sequence gets its own carpet session (a random carpet per ``carpets_per_split``
+scene of people of one split, and one shard: every subject does every activity once
+alone, in an order of their own; multi-person scenes are rounds of one activity per
+person (people doing several activities in turn would need more floor than a 1.83 m
+carpet has; lying activities are left out of 3-person rounds for the same reason). A
+round whose people cannot be placed after a few tries is skipped and counted in the
+manifest (``skipped_scenes``). Each sequence gets its own carpet session (a random carpet per ``carpets_per_split``
 group, a new session per sequence: temperature, drift), so the model sees many carpets.
 Everything derives from ``seed``: the same call writes the same files. Sequences are
 independent and run on ``workers`` processes.
@@ -35,7 +39,7 @@ class Plan:
     index: int
     split: str
     subjects: tuple[int, ...]
-    activities: tuple[str, ...]
+    activities: tuple[tuple[str, ...], ...]  # per person
     seconds_per_activity: float
     carpet_seed: int
     session: int
@@ -50,26 +54,32 @@ def split_subjects(n: int, rng: np.random.Generator) -> list[str]:
     return [splits[i] for i in rng.permutation(n)]
 
 
+LYING = ("push_up", "sit_up")
+
+
 def plan_sequences(subject_splits: list[str], people: tuple[int, int], activities: tuple[str, ...],
                    seconds_per_activity: float, rng: np.random.Generator, carpets_per_split: int = 3) -> list[Plan]:
-    """Every subject does every activity once alone; multi-person scenes are added on top."""
+    """Every subject does every activity once alone; multi-person rounds are added on top."""
     plans: list[Plan] = []
     lo, hi = people
+
+    def add(split: str, group: tuple[int, ...], acts: tuple[tuple[str, ...], ...]) -> None:
+        plans.append(Plan(len(plans), split, group, acts, seconds_per_activity,
+                          carpet_seed=int(rng.integers(carpets_per_split)) + 1000 * ("train", "val", "test").index(split),
+                          session=len(plans), seed=int(rng.integers(2**31))))
+
     for split in ("train", "val", "test"):
         members = [i for i, s in enumerate(subject_splits) if s == split]
-        if not members:
-            continue
-        groups: list[tuple[int, ...]] = []
         if lo <= 1:
-            groups += [(m,) for m in members]
+            for m in members:
+                add(split, (m,), (tuple(rng.permutation(activities)),))
         for k in range(max(2, lo), hi + 1):
-            if len(members) >= k:
-                for _ in range(max(1, len(members) // k)):
-                    groups.append(tuple(int(x) for x in rng.choice(members, size=k, replace=False)))
-        for g in groups:
-            plans.append(Plan(len(plans), split, g, activities, seconds_per_activity,
-                              carpet_seed=int(rng.integers(carpets_per_split)) + 1000 * ("train", "val", "test").index(split),
-                              session=len(plans), seed=int(rng.integers(2**31))))
+            if len(members) < k:
+                continue
+            pool = [a for a in activities if k < 3 or a not in LYING] or list(activities)
+            for _ in range(max(1, len(members) // k) * max(1, len(activities) // 2)):
+                group = tuple(int(x) for x in rng.choice(members, size=k, replace=False))
+                add(split, group, tuple((str(rng.choice(pool)),) for _ in group))
     return plans
 
 
@@ -90,10 +100,10 @@ class Renderer:
         from sim.motion import scene
         from sim.sensor import CarpetSensor, FrameStream, StreamConfig
 
-        rng = np.random.default_rng(plan.seed)
         subjects = [subject_list[i] for i in plan.subjects]
         size = self.grid * self.pitch_m
-        sc = scene(subjects, list(plan.activities), plan.seconds_per_activity, self.rate_hz, (size, size), rng, model=self.body)
+        sc = place_scene(scene, subjects, [list(a) for a in plan.activities], plan.seconds_per_activity, self.rate_hz, size,
+                         plan.seed, self.body)
         n, p_max = sc.num_frames, 3
         pressure = np.zeros((n, self.grid, self.grid), np.float32)
         out = {
@@ -147,16 +157,37 @@ class Renderer:
                 "sequence": np.zeros(n, np.int32), "frame_flags": flags, "fault_mask": fault, **out}
 
 
+def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, size_m, seed, body, attempts: int = 4):
+    """A scene of these people, retrying with new orders and places when they do not fit.
+
+    Several large people doing lying activities may not fit a 1.83 m carpet at all; after
+    ``attempts`` the error says so (the caller chooses smaller groups).
+    """
+    last = None
+    for attempt in range(attempts):
+        rng = np.random.default_rng((seed, attempt))
+        try:
+            return scene_fn(subjects, activities, seconds_per_activity, rate_hz, (size_m, size_m), rng, model=body, tries=10)
+        except ValueError as exc:
+            last = exc
+    raise ValueError(f"{len(subjects)} people doing {activities} did not fit the carpet in {attempts} attempts: {last}")
+
+
 _RENDERER: Renderer | None = None
 
 
-def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray]]:
+def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray] | None]:
+    """Render one plan; None when its people could not be placed on the carpet."""
     global _RENDERER
     plan, subjects, settings = args
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
     if _RENDERER is None:
         _RENDERER = Renderer(**settings)
-    return plan.index, _RENDERER.render(plan, subjects)
+    try:
+        return plan.index, _RENDERER.render(plan, subjects)
+    except ValueError:
+        if len(plan.subjects) == 1:
+            raise
+        return plan.index, None
 
 
 def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: float = 10.0, people: tuple[int, int] = (1, 1),
@@ -180,6 +211,7 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
                            subjects=subject_records, source="sim", overwrite=overwrite,
                            settings={"seed": seed, "subjects": subjects, "seconds_per_activity": seconds_per_activity,
                                      "people": list(people), "activities": list(activities), "adc_bits": adc_bits, "body": body})
+    os.environ["OMP_NUM_THREADS"] = os.environ["OPENBLAS_NUM_THREADS"] = "1"  # BLAS threads fight on 2 cores (workers inherit)
     jobs = [(p, motion_subjects, settings) for p in plans]
     t0, done, frames = time.monotonic(), 0, 0
     results: dict[int, dict[str, np.ndarray]] = {}
@@ -190,13 +222,18 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
         while next_index in results:
             arrays = results.pop(next_index)
             plan = plans[next_index]
-            writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed})
+            if arrays is None:
+                writer.manifest.setdefault("skipped_scenes", []).append(
+                    {"subjects": list(plan.subjects), "activities": [list(a) for a in plan.activities]})
+            else:
+                writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed,
+                                            "people": len(plan.subjects)})
             next_index += 1
 
-    def report(arrays: dict[str, np.ndarray]) -> None:
+    def report(arrays: dict[str, np.ndarray] | None) -> None:
         nonlocal done, frames
         done += 1
-        frames += len(arrays["counts"])
+        frames += 0 if arrays is None else len(arrays["counts"])
         if progress:
             el = time.monotonic() - t0
             eta = el / done * (len(plans) - done)
