@@ -45,6 +45,7 @@ class LiveCarpet:
         self._scene = None
         self._scene_chunk = -1
         self._next = 0
+        self.truth(0)  # place the first scene now, so the first frame is as quick as the others
 
     def _chunk(self, chunk: int):
         if chunk != self._scene_chunk:

@@ -66,7 +66,7 @@ def test_stream_prints_a_summary_each_second(capsys):
     assert main(["stream", "--source", "sim://?world=footsteps&people=1&speed=4", "--seconds", "1.6"]) == 0
     out = capsys.readouterr().out
     assert "device 'sim-0', 96x96, 12-bit" in out
-    assert "fps  loaded sensels" in out
+    assert "fps  active sensels" in out
     assert "decoder:" in out and "dropped 0" in out
 
 
