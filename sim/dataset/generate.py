@@ -5,7 +5,7 @@
 Subjects are split 80/10/10 by subject (at least one in val and test when there are
 three or more), so test subjects are never seen in training. Each *sequence* is one
 scene of people of one split, and one shard: every subject does every activity once
-alone, in an order of their own; multi-person scenes are rounds of one activity per
+alone, in an order of their own (three activities per sequence); multi-person scenes are rounds of one activity per
 person (people doing several activities in turn would need more floor than a 1.83 m
 carpet has; lying activities are left out of 3-person rounds for the same reason). A
 round whose people cannot be placed after a few tries is skipped and counted in the
@@ -55,6 +55,21 @@ def split_subjects(n: int, rng: np.random.Generator) -> list[str]:
 
 
 LYING = ("push_up", "sit_up")
+ACTIVITIES_PER_SEQUENCE = 3
+
+
+def _sequences_alone(activities: tuple[str, ...], rng: np.random.Generator) -> list[tuple[str, ...]]:
+    """Every activity once, shuffled, ACTIVITIES_PER_SEQUENCE at a time, at most one lying
+    activity per sequence (lying forward then backward needs more than a 1.83 m carpet)."""
+    lying = [str(a) for a in rng.permutation([a for a in activities if a in LYING])]
+    other = [str(a) for a in rng.permutation([a for a in activities if a not in LYING])]
+    n_seq = max(len(lying), -(-len(activities) // ACTIVITIES_PER_SEQUENCE))
+    seqs: list[list[str]] = [[] for _ in range(n_seq)]
+    for i, a in enumerate(lying):
+        seqs[i].append(a)
+    for i, a in enumerate(other):
+        seqs[min(range(n_seq), key=lambda k: (len(seqs[k]), k))].append(a)
+    return [tuple(rng.permutation(q).tolist()) for q in seqs if q]
 
 
 def plan_sequences(subject_splits: list[str], people: tuple[int, int], activities: tuple[str, ...],
@@ -70,9 +85,10 @@ def plan_sequences(subject_splits: list[str], people: tuple[int, int], activitie
 
     for split in ("train", "val", "test"):
         members = [i for i, s in enumerate(subject_splits) if s == split]
-        if lo <= 1:
-            for m in members:
-                add(split, (m,), (tuple(rng.permutation(activities)),))
+        if lo <= 1:  # alone: every activity, in an order of their own, a few per sequence (a lying
+            for m in members:  # person's reach over many activities may not fit the carpet at once)
+                for seq in _sequences_alone(activities, rng):
+                    add(split, (m,), (seq,))
         for k in range(max(2, lo), hi + 1):
             if len(members) < k:
                 continue
@@ -167,7 +183,8 @@ def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, s
     for attempt in range(attempts):
         rng = np.random.default_rng((seed, attempt))
         try:
-            return scene_fn(subjects, activities, seconds_per_activity, rate_hz, (size_m, size_m), rng, model=body, tries=10)
+            return scene_fn(subjects, activities, seconds_per_activity, rate_hz, (size_m, size_m), rng, model=body,
+                            tries=40 if len(subjects) == 1 else 10)
         except ValueError as exc:
             last = exc
     raise ValueError(f"{len(subjects)} people doing {activities} did not fit the carpet in {attempts} attempts: {last}")
@@ -184,9 +201,7 @@ def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray] | None]:
         _RENDERER = Renderer(**settings)
     try:
         return plan.index, _RENDERER.render(plan, subjects)
-    except ValueError:
-        if len(plan.subjects) == 1:
-            raise
+    except ValueError:  # the people could not be placed on the carpet: recorded as skipped
         return plan.index, None
 
 
