@@ -23,6 +23,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench import machine  # noqa: E402
 from calibration import Applier  # noqa: E402
 from calibration.from_truth import calibration_from_truth  # noqa: E402
 from calibration.runtime import BaselineTracker, CalibratedFrames  # noqa: E402
@@ -33,15 +34,6 @@ from sim.sensor import CarpetSensor  # noqa: E402
 RATE_HZ = 14.0
 GOAL_MS = 3.0
 
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
 
 
 def frames(seconds: float = 30.0, seed: int = 0):
@@ -147,7 +139,7 @@ def main(repeats: int = 5) -> None:
         "goal": f"calibrate + filter + segment + track ≤ {GOAL_MS} ms per 96×96 frame on one core (issue 5)",
         "frames": "30 s of two people walking (sim.footsteps) on CarpetSensor.random(0), 14 Hz, generated before timing; each call timed alone; 5 repeats, each statistic the lowest over the repeats (a shared machine)",
         "command": "python bench/calibration_runtime.py", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "machine": {"platform": platform.platform(), "cpu_model": cpu_model(), "cpu_count": os.cpu_count(),
+        "machine": {"platform": platform.platform(), "cpu_model": machine.cpu_model(), "cpu_count": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "threads": 1,
                     "load_average": os.getloadavg()},
         "results": results,

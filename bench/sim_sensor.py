@@ -18,17 +18,9 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench import machine  # noqa: E402
 from sim.sensor import CarpetSensor  # noqa: E402
 
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
 
 
 def time_frames(sensor: CarpetSensor, repeats: int = 7, frames: int = 100) -> dict:
@@ -57,7 +49,7 @@ def main() -> None:
     out = {
         "benchmark": "sim_sensor", "goal_ms_per_frame": 2.0, "grid": "96x96",
         "command": "python bench/sim_sensor.py", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "machine": {"platform": platform.platform(), "cpu_model": cpu_model(), "cpu_count": os.cpu_count(),
+        "machine": {"platform": platform.platform(), "cpu_model": machine.cpu_model(), "cpu_count": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "load_average": os.getloadavg()},
         "results": results,
     }
