@@ -24,6 +24,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.peripherals",
     "edge.cli.render",
     "sim.cli",
+    "export.cli",
     "calibration.cli",
 ]
 

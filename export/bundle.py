@@ -1,0 +1,183 @@
+"""Write a model bundle (design.md): encoder.onnx, head.onnx, manifest.json.
+
+    build_bundle("runs/lean/best.pt", data="/work/data/sim96", out="edge/models/lean-96", name="lean-96")
+
+exports fp32 graphs (parity checked against torch), quantizes them (encoder static QDQ per
+channel; head dynamic uint8 if it measures best, else float), gates int8 against fp32 on the
+validation tracks, and writes the bundle with the int8 graphs (``precision="int8"``) or the fp32
+ones (``precision="fp32"``). The manifest records everything the runtime and a reader need.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from edge.infer.bundle import SCHEMA, sha256_file
+from edge.infer.normalise import NORMALISATION
+from export.model import OUTPUT_SIZES, OUTPUTS, ModelConfig
+
+OUTPUT_MEANING = {
+    "rot6d": "24 joints × 6D rotation (first column of R, then second); published as axis-angle pose_aa (72)",
+    "betas": "10 shape coefficients of the body model",
+    "transl_rel_m": "pelvis joint minus (CoP_x, CoP_y, 0) of the window's last frame, carpet frame, metres",
+    "activity_logits": "activity classes, in the order of 'activities'",
+    "confidence": "sigmoid; trained to predict exp(-pelvis-aligned MPJPE / 10 cm)",
+}
+
+
+def git_revision() -> str:
+    from sim.dataset.format import git_revision as rev
+
+    return rev()
+
+
+def write_bundle(out_dir: str | Path, encoder: str | Path, head: str | Path, cfg: ModelConfig, *, name: str,
+                 pitch_m: float, rate_hz: float = 14.0, body_model: str = "lite", training: dict[str, Any] | None = None,
+                 metrics: dict[str, Any] | None = None, quantization: dict[str, Any] | None = None,
+                 overwrite: bool = True) -> Path:
+    """Copy the two graphs into ``out_dir`` and write manifest.json (last, with every file's hash)."""
+    from edge.body.model import SHIPPED_MODELS, shipped_model_path
+
+    out = Path(out_dir)
+    if out.exists() and any(out.iterdir()) and not overwrite:
+        raise FileExistsError(f"{out} is not empty")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "manifest.json").unlink(missing_ok=True)
+    shutil.copyfile(encoder, out / "encoder.onnx")
+    shutil.copyfile(head, out / "head.onnx")
+    body_path = shipped_model_path(body_model) if body_model in SHIPPED_MODELS else Path(body_model)
+    h, w = cfg.grid
+    manifest = {
+        "schema": SCHEMA, "name": name, "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "git_revision": git_revision(),
+        "grid": [h, w], "pitch_m": pitch_m, "rate_hz": rate_hz, "window": cfg.window, "features": cfg.features,
+        "input": {"name": "pressure", "shape": ["batch", 1, h, w], "dtype": "float32",
+                  "content": "ONE person's calibrated pressure in kPa (other people's sensels zeroed), normalised",
+                  "normalisation": NORMALISATION},
+        "encoder": {"file": "encoder.onnx", "input": "pressure", "output": "features", "shape": ["batch", cfg.features]},
+        "head": {"file": "head.onnx", "input": "features", "shape": ["batch", cfg.window, cfg.features],
+                 "window": "causal: the target frame is the LAST of the window; a new track's history is its first frame repeated"},
+        "outputs": {k: {"shape": ["batch", OUTPUT_SIZES[k]] if k != "confidence" else ["batch"], "meaning": OUTPUT_MEANING[k]}
+                    for k in OUTPUTS},
+        "translation": "transl_m = transl_rel_m + (CoP_x, CoP_y, 0); CoP of the model input's last frame in carpet metres "
+                       "(edge.infer.normalise.center_of_pressure_m)",
+        "activities": _activities(),
+        "body_model": {"name": body_model, "file": body_path.name, "sha256": sha256_file(body_path)},
+        "model_config": cfg.to_dict(),
+        "training": training or {},
+        "quantization": quantization or {"precision": "fp32"},
+        "metrics": metrics or {},
+        "files": {f: sha256_file(out / f) for f in ("encoder.onnx", "head.onnx")},
+    }
+    part = out / "manifest.json.part"
+    part.write_text(json.dumps(manifest, indent=1, default=_json_default))
+    part.replace(out / "manifest.json")
+    return out
+
+
+def _activities() -> list[str]:
+    from sim.motion import ACTIVITIES
+
+    return list(ACTIVITIES)
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(type(o))
+
+
+def build_bundle(checkpoint: str | Path, data: str | Path, out: str | Path, name: str, precision: str = "int8",
+                 calib_frames: int = 256, frame_stride: int = 2, seed: int = 0, max_eval_tracks: int | None = None) -> dict:
+    """Checkpoint → fp32 ONNX (+ parity) → int8 (+ gate) → bundle. Returns the report written in the manifest."""
+    from edge.body import BodyModel
+    from export.data import TRAINING_INPUT, load_tracks
+    from export.evaluate import track_inputs
+    from export.onnx_export import export_onnx, parity
+    from export.quantize import quantize_and_gate
+    from export.train import load_model
+    from sim.dataset import Dataset
+
+    import torch
+
+    if precision not in ("int8", "fp32"):
+        raise ValueError("precision must be 'int8' or 'fp32'")
+    ck = torch.load(checkpoint, map_location="cpu", weights_only=False)
+    net = load_model(checkpoint)
+    cfg = net.cfg
+    ds = Dataset(data)
+    pitch = float(ds.manifest["pitch_m"])
+    body = BodyModel.load(cfg.body_model)
+    val = load_tracks(ds, "val") or load_tracks(ds, "test")
+    if max_eval_tracks:
+        val = val[:max_eval_tracks]
+    train_tracks = load_tracks(ds, "train", max_tracks=8)
+    rng = np.random.default_rng(seed)
+    frames = np.concatenate([track_inputs(t, pitch, seed + i)[0] for i, t in enumerate(train_tracks)])
+    calib = frames[rng.choice(len(frames), min(calib_frames, len(frames)), replace=False)]
+    with tempfile.TemporaryDirectory() as tmp:
+        fp32 = export_onnx(net, tmp)
+        par = parity(net, fp32["encoder"], fp32["head"], inputs=calib[:4])
+        report = quantize_and_gate(fp32, Path(tmp) / "int8", calib, val, cfg.window, pitch, body, frame_stride=frame_stride)
+        report["parity_max_abs"] = par
+        report["precision"] = precision
+        if precision == "int8" and not report["gate_passed"]:
+            raise RuntimeError(f"int8 gate failed: MPJPE +{report['gate_delta_cm']:.3f} cm > {report['gate_cm']} cm")
+        enc, head = (report["encoder"], report["head"]) if precision == "int8" else (fp32["encoder"], fp32["head"])
+        tc = ck.get("train_config", {})
+        training = {"data": str(data), "dataset_schema": ds.manifest.get("schema"), "dataset_settings": ds.manifest.get("settings"),
+                    "dataset_git_revision": ds.manifest.get("git_revision"), "frames": len(ds),
+                    "subjects": {s: [x["subject_id"] for x in ds.subjects if x["split"] == s] for s in ("train", "val", "test")},
+                    "input": TRAINING_INPUT, "steps": int(ck["step"]), "batch": tc.get("batch"), "chunks": tc.get("chunks"),
+                    "lr": tc.get("lr"), "weight_decay": tc.get("weight_decay"), "seed": tc.get("seed")}
+        metrics = {"split": "val" if load_tracks(ds, "val", max_tracks=1) else "test", "frames": report["frames"],
+                   "mpjpe_cm": report["mpjpe_int8_fake_quant_cm"] if precision == "int8" else report["mpjpe_fp32_cm"],
+                   "mpjpe_fp32_cm": report["mpjpe_fp32_cm"], "mpjpe_int8_x86_kernels_cm": report["mpjpe_int8_x86_kernels_cm"],
+                   "latency_1_thread_ms": report["latency_1_thread"]}
+        quant = {k: v for k, v in report.items() if k not in ("encoder", "head")}
+        write_bundle(out, enc, head, cfg, name=name, pitch_m=pitch, rate_hz=float(ds.manifest.get("rate_hz", 14.0)),
+                     body_model=cfg.body_model, training=training, metrics=metrics, quantization=quant)
+    test = load_tracks(ds, "test")
+    if test:  # the shipped bundle itself (as the board loads it) on subjects never seen in training
+        metrics["test"] = bundle_metrics(out, test, pitch, body, frame_stride=frame_stride)
+        metrics["test"]["baseline_mean_pose_mpjpe_cm"] = mean_pose_baseline_cm(load_tracks(ds, "train"), test)
+        mpath = Path(out) / "manifest.json"
+        manifest = json.loads(mpath.read_text())
+        manifest["metrics"] = metrics
+        mpath.write_text(json.dumps(manifest, indent=1, default=_json_default))
+        report["test"] = metrics["test"]
+    return report
+
+
+def bundle_metrics(folder: str | Path, tracks, pitch_m: float, body, frame_stride: int = 2) -> dict:
+    """MPJPE / translation / activity of a bundle loaded as the board loads it (x86 kernels here)."""
+    from edge.infer import ModelBundle
+    from export.evaluate import track_metrics
+    from export.model.heads import OUTPUTS
+
+    b = ModelBundle.load(folder)
+    names = [o.name for o in b._head.get_outputs()]
+
+    def head(w):
+        out = dict(zip(names, b._head.run(None, {b._head_name: np.ascontiguousarray(w, np.float32)})))
+        return {k: out[k] for k in OUTPUTS}
+
+    m = track_metrics(tracks, b.encode, head, b.window, pitch_m, body, frame_stride=frame_stride)
+    m["subjects"] = sorted({int(t.subject) for t in tracks})
+    return m
+
+
+def mean_pose_baseline_cm(train_tracks, test_tracks) -> float:
+    """The mean training pose (pelvis-centred joints) at every test frame: pelvis-aligned MPJPE, cm."""
+    mean = np.mean(np.concatenate([t.joints_m - t.joints_m[:, :1] for t in train_tracks]), 0)
+    err = np.concatenate([np.linalg.norm((t.joints_m - t.joints_m[:, :1]) - mean, axis=-1).mean(-1) for t in test_tracks])
+    return float(err.mean() * 100)
