@@ -190,17 +190,17 @@ def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, s
     raise ValueError(f"{len(subjects)} people doing {activities} did not fit the carpet in {attempts} attempts: {last}")
 
 
-_RENDERER: Renderer | None = None
+_RENDERERS: dict[tuple, Renderer] = {}  # per process, by settings: models are loaded once
 
 
 def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray] | None]:
     """Render one plan; None when its people could not be placed on the carpet."""
-    global _RENDERER
     plan, subjects, settings = args
-    if _RENDERER is None:
-        _RENDERER = Renderer(**settings)
+    key = tuple(sorted(settings.items()))
+    if key not in _RENDERERS:
+        _RENDERERS[key] = Renderer(**settings)
     try:
-        return plan.index, _RENDERER.render(plan, subjects)
+        return plan.index, _RENDERERS[key].render(plan, subjects)
     except ValueError:  # the people could not be placed on the carpet: recorded as skipped
         return plan.index, None
 

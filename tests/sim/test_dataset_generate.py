@@ -65,3 +65,12 @@ def test_cli_generate_and_show(tmp_path, capsys):
     assert "unknown activities ['flying']" in capsys.readouterr().err
     assert main(["sim", "generate", "--out", str(out), "--subjects", "1", "--activities", "squat"]) == 2
     assert "already holds a dataset" in capsys.readouterr().err
+
+
+def test_grids_in_one_process_do_not_share_models(tmp_path):
+    """Renderers are cached per process; a 32×32 run must not leak into a 96×96 one."""
+    small = generate(tmp_path / "g32", subjects=1, seconds_per_activity=0.5, grid=32, pitch_mm=57.15,
+                     activities=("squat",), progress=False)
+    big = generate(tmp_path / "g96", subjects=1, seconds_per_activity=0.5, grid=96, activities=("squat",), progress=False)
+    assert Dataset(small).load_shard(0)["counts"].shape[1:] == (32, 32)
+    assert Dataset(big).load_shard(0)["counts"].shape[1:] == (96, 96)
