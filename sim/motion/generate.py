@@ -242,7 +242,8 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     euler, heading, contact, anchor, heel, lab = (np.concatenate(x) for x in zip(*parts))
     n = len(euler)
     sway = _sway(n, rate_hz, style, rng)
-    on_hands = np.convolve(contact[:, 2] | contact[:, 3], np.ones(9), "same") > 0  # no root sway near a hand contact
+    # no root sway near a hand contact ("full" then centred: also right for sequences under 9 frames)
+    on_hands = np.convolve(contact[:, 2] | contact[:, 3], np.ones(9), "full")[4 : 4 + n] > 0
     sway[on_hands, 0] = 0.0
     euler = euler + sway
     local = euler_deg_to_matrix(euler)
