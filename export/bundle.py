@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from edge.infer.bundle import SCHEMA, sha256_file
+from edge.infer.bundle import SCHEMA
+from edge.provenance import git_revision, sha256_file
 from edge.infer.normalise import NORMALISATION
 from export.model import OUTPUT_SIZES, OUTPUTS, ModelConfig
 
@@ -30,12 +31,6 @@ OUTPUT_MEANING = {
     "activity_logits": "activity classes, in the order of 'activities'",
     "confidence": "sigmoid; trained to predict exp(-pelvis-aligned MPJPE / 10 cm)",
 }
-
-
-def git_revision() -> str:
-    from sim.dataset.format import git_revision as rev
-
-    return rev()
 
 
 def write_bundle(out_dir: str | Path, encoder: str | Path, head: str | Path, cfg: ModelConfig, *, name: str,

@@ -12,13 +12,13 @@ disagree with the manifest, or whose body model differs from the one it was trai
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from edge.provenance import sha256_file  # noqa: F401  (re-exported: export and tests use it from here)
 from edge.infer.normalise import NORMALISATION, center_of_pressure_m, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
 
@@ -29,14 +29,6 @@ HEAD_OUTPUTS = ("rot6d", "betas", "transl_rel_m", "activity_logits", "confidence
 
 class BundleError(Exception):
     """A model bundle that is missing, tampered with, or does not fit this carpet."""
-
-
-def sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def session_options(threads: int = 1):

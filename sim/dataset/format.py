@@ -31,15 +31,15 @@ dataset that looks complete.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
-import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
+
+from edge.provenance import git_revision, sha256_file
 
 SCHEMA = "cavatar.dataset/1"
 SPLITS = ("train", "val", "test")
@@ -56,23 +56,6 @@ PERSON_ARRAYS = {
 
 class DatasetError(Exception):
     """A dataset folder that is missing, incomplete, or fails its hashes."""
-
-
-def sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def git_revision() -> str:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5,
-                             cwd=Path(__file__).resolve().parent)
-        return out.stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
 
 
 @dataclass
