@@ -12,12 +12,12 @@ moved in protocol.toml moves in C too, and a field added or removed fails to com
 
 from __future__ import annotations
 
-import argparse
 import re
 import struct
 import sys
 from pathlib import Path
 
+from firmware_protocol import generated
 from firmware_protocol import spec as _spec
 
 HEADER_PATH = Path(__file__).with_name("c") / "cavatar_protocol_defs.h"
@@ -136,22 +136,7 @@ def render(spec: _spec.Spec | None = None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m firmware_protocol.gen_c", description=__doc__.splitlines()[0])
-    ap.add_argument("--check", action="store_true", help="do not write; exit 1 if the committed header differs")
-    ap.add_argument("--output", type=Path, default=HEADER_PATH, help=f"header to write or check (default {HEADER_PATH})")
-    args = ap.parse_args(argv)
-    text = render()
-    if args.check:
-        current = args.output.read_text() if args.output.exists() else None
-        if current != text:
-            print(f"{args.output} is stale: run `python -m firmware_protocol.gen_c`", file=sys.stderr)
-            return 1
-        print(f"{args.output} is current")
-        return 0
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text)
-    print(f"wrote {args.output}")
-    return 0
+    return generated.main("python -m firmware_protocol.gen_c", __doc__.splitlines()[0], HEADER_PATH, render, argv)
 
 
 if __name__ == "__main__":

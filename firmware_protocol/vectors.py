@@ -18,7 +18,6 @@ One JSON object per line, of two kinds:
 
 from __future__ import annotations
 
-import argparse
 import binascii
 import json
 import random
@@ -27,7 +26,7 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator
 
-from firmware_protocol import codec, cobs
+from firmware_protocol import codec, cobs, generated
 
 VECTORS_PATH = Path(__file__).with_name("vectors") / "vectors.jsonl"
 P = codec.PACKING
@@ -295,21 +294,8 @@ def load(path: Path = VECTORS_PATH) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m firmware_protocol.vectors", description=__doc__.splitlines()[0])
-    ap.add_argument("--check", action="store_true", help="do not write; exit 1 if the committed file differs")
-    ap.add_argument("--output", type=Path, default=VECTORS_PATH, help=f"file to write or check (default {VECTORS_PATH})")
-    args = ap.parse_args(argv)
-    text = render()
-    if args.check:
-        if not args.output.exists() or args.output.read_text() != text:
-            print(f"{args.output} is stale: run `python -m firmware_protocol.vectors`", file=sys.stderr)
-            return 1
-        print(f"{args.output} is current ({text.count(chr(10))} vectors)")
-        return 0
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text)
-    print(f"wrote {args.output} ({text.count(chr(10))} vectors)")
-    return 0
+    return generated.main("python -m firmware_protocol.vectors", __doc__.splitlines()[0], VECTORS_PATH, render, argv,
+                          summary=lambda text: f" ({text.count(chr(10))} vectors)")
 
 
 if __name__ == "__main__":
