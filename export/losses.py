@@ -20,27 +20,9 @@ CONFIDENCE_SCALE_M = 0.10  # confidence target: exp(-pelvis-aligned MPJPE / 10 c
 
 def body_from_matrices(body: TorchBodyModel, rot: torch.Tensor, betas: torch.Tensor, transl_m: torch.Tensor,
                        vertices: bool = False) -> dict[str, torch.Tensor]:
-    """The twin's forward with rotation matrices (B,J,3,3) instead of axis-angle (same maths)."""
-    batch, dtype = rot.shape[0], body.v_template.dtype
-    rest_joints = body.j_template + torch.einsum("jkl,bl->bjk", body.j_shapedirs, betas)
-    g_rot, g_t = [rot[:, 0]], [rest_joints[:, 0]]
-    for i in range(1, body.num_joints):
-        p = body.parents[i]
-        g_rot.append(g_rot[p] @ rot[:, i])
-        g_t.append((g_rot[p] @ (rest_joints[:, i] - rest_joints[:, p])[..., None])[..., 0] + g_t[p])
-    g_rot, g_t = torch.stack(g_rot, 1), torch.stack(g_t, 1)
-    offset = transl_m - rest_joints[:, 0]
-    out = {"joints": g_t + offset[:, None]}
-    if vertices:
-        v = body.v_template + (betas @ body.shapedirs.T).reshape(batch, -1, 3)
-        if body.has_posedirs:
-            eye = torch.eye(3, dtype=dtype, device=rot.device)
-            v = v + (((rot[:, 1:] - eye).reshape(batch, -1)) @ body.posedirs).reshape(batch, -1, 3)
-        t = g_t - (g_rot @ rest_joints[..., None])[..., 0]
-        a = torch.cat([g_rot, t[..., None]], -1).reshape(batch, body.num_joints, 12)
-        per_vertex = (body.weights @ a).reshape(batch, -1, 3, 4)
-        out["vertices"] = (per_vertex[..., :3] @ v[..., None])[..., 0] + per_vertex[..., 3] + offset[:, None]
-    return out
+    """The twin's forward with rotation matrices (B,J,3,3) instead of axis-angle."""
+    dtype = body.v_template.dtype
+    return body.forward_matrices(rot.to(dtype), betas.to(dtype), transl_m.to(dtype), vertices)
 
 
 def generator_losses(out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], body: TorchBodyModel,

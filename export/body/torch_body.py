@@ -86,8 +86,14 @@ class TorchBodyModel(torch.nn.Module):
             betas = torch.nn.functional.pad(betas, (0, self.num_betas - betas.shape[-1]))
         betas = betas.to(dtype).expand(batch, -1)
         transl = pose.new_zeros(batch, 3) if transl_m is None else transl_m.to(dtype).expand(batch, 3)
+        return self.forward_matrices(axis_angle_to_matrix(pose), betas, transl, vertices)
 
-        rot = axis_angle_to_matrix(pose)  # (B,J,3,3)
+    def forward_matrices(self, rot: torch.Tensor, betas: torch.Tensor, transl: torch.Tensor,
+                         vertices: bool = False) -> dict[str, torch.Tensor]:
+        """The forward from rotation matrices rot (B,J,3,3), betas (B,NB), transl (B,3) of this
+        model's dtype (training feeds the network's 6D rotations as matrices)."""
+        dtype = self.v_template.dtype
+        batch = rot.shape[0]
         # J[b,j,k] = Jt[j,k] + sum_l JS[j,k,l] betas[b,l]
         rest_joints = self.j_template + torch.einsum("jkl,bl->bjk", self.j_shapedirs, betas)
         g_rot = [None] * self.num_joints
