@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import lfilter
 
-from .model import FrameState, ghosts
+from .model import FrameState, ghosts, line_sums
 from .params import SensorParams, hill_inverse
 
 
@@ -96,12 +96,7 @@ def true_pressure_estimate(counts: np.ndarray, params: SensorParams, state: Fram
     if rho > 0 or shorts:
         converged = False
         for _ in range(max_iter):
-            rs = b.sum(axis=1)
-            cs = b.sum(axis=0)
-            for r, col, g in shorts:
-                merged = rs[r] + cs[col] + g
-                rs[r] = merged
-                cs[col] = merged
+            rs, cs = line_sums(b, shorts)
             nb = a_app * ((1.0 + rho * rs)[:, None] * (1.0 + rho * cs)[None, :])
             nb[unknown] = a_unknown
             delta = np.max(np.abs(nb - b))
