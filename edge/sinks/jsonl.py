@@ -24,7 +24,7 @@ counted in ``stats()['repaired']``.
 
 Rotation: when the next write would pass ``rotate_mb`` or the file is older than
 ``rotate_s`` (since this process opened it), the file is fsynced, renamed to
-``<stem>-<UTC time>.jsonl`` and a new one started; ``keep`` rotated files are kept.
+``<stem>-<UTC time to the µs>-<nn>.jsonl`` and a new one started; ``keep`` rotated files are kept.
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ import os
 import sys
 import threading
 import time
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Mapping
 from urllib.parse import unquote
@@ -138,11 +139,12 @@ class JsonlSink(Sink):
         os.fsync(self._fd)
         os.close(self._fd)
         self._fd = None
-        stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + f".{int(time.time() * 1000) % 1000:03d}Z"
-        target = self.path.with_name(f"{self.path.stem}-{stamp}{self.path.suffix}")
-        n = 1
-        while target.exists():
-            target = self.path.with_name(f"{self.path.stem}-{stamp}-{n}{self.path.suffix}")
+        # One clock reading to the microsecond, and a counter that is always there, so names sort
+        # oldest first (a separate millisecond reading could fall in the next second, and an
+        # optional "-1" sorted before the name without it).
+        stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S.%fZ")
+        n = 0
+        while (target := self.path.with_name(f"{self.path.stem}-{stamp}-{n:02d}{self.path.suffix}")).exists():
             n += 1
         os.replace(self.path, target)
         self.rotations += 1

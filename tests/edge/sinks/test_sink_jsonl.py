@@ -107,7 +107,7 @@ WRITER = textwrap.dedent("""
 @pytest.mark.parametrize("flush_ms", [0, 5])
 def test_no_partial_line_when_the_writer_is_killed(tmp_path, flush_ms):
     path = tmp_path / "bodies.jsonl"
-    url = f"jsonl://{path}?flush_ms={flush_ms}&rotate_mb=0.2"
+    url = f"jsonl://{path}?flush_ms={flush_ms}&rotate_mb=0.2&keep=0"  # keep every rotated file: all seqs are checked
     proc = subprocess.Popen([sys.executable, "-c", WRITER.format(helpers=str(Path(__file__).parent), url=url)],
                             stdout=subprocess.PIPE, text=True, cwd=REPO)
     try:
