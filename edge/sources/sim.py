@@ -65,6 +65,10 @@ def packing_for(bits: int) -> int:
 class SimLink(Link):
     def __init__(self, **opts) -> None:
         self.opts = opts
+        # speed=0 runs a virtual clock as fast as the consumer takes frames: like a recording,
+        # nothing is dropped for a slow consumer (a real-time sim drains to the newest frame)
+        self.speed = opts["speed"]
+        self.paced = opts["speed"] > 0
         self.board = None
         self._t0 = 0.0
         self._virtual_now = 0.0
