@@ -64,13 +64,16 @@ def track_metrics(tracks: list[Track], encode: Encode, head: Head, window: int, 
             "activity_acc": float(acc.mean()), "frames": int(len(err))}
 
 
-def torch_callables(net) -> tuple[Encode, Head]:
-    """encode/head callables over a torch CAvatarNet (eval mode, no grad)."""
+def torch_callables(net, frame_head=None) -> tuple[Encode, Head]:
+    """encode/head callables over a torch CAvatarNet (eval mode, no grad); with ``frame_head``
+    (the `frames` training stage's) the head sees only each window's last frame."""
     import torch
 
     from export.model.heads import OUTPUTS
 
     net.eval()
+    if frame_head is not None:
+        frame_head.eval()
 
     def encode(x: np.ndarray) -> np.ndarray:
         with torch.no_grad():
@@ -78,6 +81,8 @@ def torch_callables(net) -> tuple[Encode, Head]:
 
     def head(w: np.ndarray) -> dict:
         with torch.no_grad():
-            return {k: v.numpy() for k, v in zip(OUTPUTS, net.head(torch.from_numpy(w)))}
+            w = torch.from_numpy(w)
+            outs = frame_head(w[:, -1]) if frame_head is not None else net.head(w)
+            return {k: v.numpy() for k, v in zip(OUTPUTS, outs)}
 
     return encode, head

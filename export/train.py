@@ -3,9 +3,13 @@
     python -m export.train --data /work/data/sim96 --out runs/lean --preset lean --steps 5000
     cavatar train --data /work/data/sim96 --out runs/lean --resume
 
-A step takes ``chunks`` chunks of B+T-1 consecutive frames of one person each; every frame of
-a chunk is encoded ONCE and the features are unfolded into B overlapping windows of T. The
-run folder holds ``config.json``, ``checkpoint.pt`` (model, discriminator, optimisers, step,
+Stages (``stage``, export/stages.py says why): ``frames`` trains the encoder with a one-frame
+head on B frames drawn independently from all tracks; ``head`` freezes the encoder, caches
+every frame's features and trains the temporal head on B independent windows; ``windows``
+(end to end) takes ``chunks`` chunks of B+T-1 consecutive frames of one person each, every
+frame of a chunk encoded ONCE and unfolded into B overlapping windows of T. ``init`` starts a
+stage from another run's weights. ``data`` may name several datasets of one grid (the first
+one's val split validates). The run folder holds ``config.json``, ``checkpoint.pt`` (model, discriminator, optimisers, step,
 every RNG state; written every ``checkpoint_every`` steps, at the end and on SIGINT) and
 ``log.jsonl`` (one line of losses per ``log_every`` steps, one per validation).
 """
@@ -34,8 +38,11 @@ CHECKPOINT = "checkpoint.pt"
 class TrainConfig:
     """Everything a run needs besides the model configuration."""
 
-    data: str = ""
+    data: str | list[str] = ""      # a dataset folder, or several (same grid and pitch)
     out: str = "runs/lean"
+    stage: str = "windows"          # "frames", "head" or "windows" (export/stages.py)
+    init: str = ""                  # checkpoint whose model (and frame head) weights start this run
+    cache_copies: int = 2           # stage "head": corruption copies of every frame in the feature cache
     steps: int = 5000
     batch: int = 32                 # B windows per chunk
     chunks: int = 1                 # chunks (of different tracks) per step
@@ -60,6 +67,12 @@ class TrainConfig:
             raise ValueError(f"unknown training config keys {unknown}")
         return cls(**d)
 
+    def data_paths(self) -> list[str]:
+        paths = [self.data] if isinstance(self.data, str) else list(self.data)
+        if not paths or not all(paths):
+            raise ValueError("no dataset given (data)")
+        return paths
+
 
 class Trainer:
     """Holds the data, model, optimisers and RNGs of one run; ``run()`` trains to ``cfg.steps``."""
@@ -67,8 +80,12 @@ class Trainer:
     def __init__(self, cfg: TrainConfig, model_cfg: ModelConfig | None = None, tracks=None, val_tracks=None):
         from export.body.torch_body import TorchBodyModel
         from export.data import load_tracks
+        from export.model.heads import FrameHead
+        from export.stages import STAGES
         from sim.dataset import Dataset
 
+        if cfg.stage not in STAGES:
+            raise ValueError(f"stage must be one of {STAGES}, got {cfg.stage!r}")
         self.cfg = cfg
         self.out = Path(cfg.out)
         self.out.mkdir(parents=True, exist_ok=True)
@@ -76,15 +93,19 @@ class Trainer:
             torch.set_num_threads(cfg.threads)
         self.device = torch.device("cuda" if cfg.device == "auto" and torch.cuda.is_available() else
                                    ("cpu" if cfg.device == "auto" else cfg.device))
-        ds = Dataset(cfg.data)
+        datasets = [Dataset(d) for d in cfg.data_paths()]
+        ds = datasets[0]
         self.dataset_manifest = ds.manifest
         self.pitch_m = float(ds.manifest["pitch_m"])
         grid = (int(ds.manifest["rows"]), int(ds.manifest["cols"]))
+        for other in datasets[1:]:
+            if (int(other.manifest["rows"]), int(other.manifest["cols"])) != grid or float(other.manifest["pitch_m"]) != self.pitch_m:
+                raise ValueError(f"{other.path}: grid/pitch differ from {ds.path}'s; train on one carpet geometry at a time")
         self.model_cfg = model_cfg or (ModelConfig.from_dict(cfg.model) if cfg.model else ModelConfig.preset("lean"))
         if self.model_cfg.grid != grid:
             self.model_cfg = ModelConfig.from_dict({**self.model_cfg.to_dict(), "grid": list(grid)})
         cfg.model = self.model_cfg.to_dict()
-        self.tracks = tracks if tracks is not None else load_tracks(ds, "train")
+        self.tracks = tracks if tracks is not None else [t for d in datasets for t in load_tracks(d, "train")]
         self.val_tracks = val_tracks if val_tracks is not None else load_tracks(ds, "val")
         self.tracks = [t for t in self.tracks if len(t) >= 2]
         if not self.tracks:
@@ -97,18 +118,66 @@ class Trainer:
         self.rng = np.random.default_rng(cfg.seed)
         self.net = CAvatarNet(self.model_cfg).to(self.device)
         self.disc = JointDiscriminator().to(self.device) if self.model_cfg.discriminator else None
+        self.frame_head = FrameHead(self.model_cfg).to(self.device) if cfg.stage == "frames" else None
+        self.cache = None  # stage "head": built from the (frozen) encoder on the first step
+        if cfg.init:
+            self.init_from(cfg.init)
         self.body = TorchBodyModel.load(self.model_cfg.body_model).to(self.device)
         if cfg.optimizer not in ("adam", "adamw"):
             raise ValueError(f"optimizer must be 'adam' or 'adamw', got {cfg.optimizer!r}")
         opt_cls = torch.optim.Adam if cfg.optimizer == "adam" else torch.optim.AdamW
-        self.opt = opt_cls(self.net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+        if cfg.stage == "head":
+            self.net.encoder.requires_grad_(False)
+        self.opt = opt_cls(self.trainable(), lr=cfg.lr, weight_decay=cfg.weight_decay)
         self.opt_d = opt_cls(self.disc.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay) if self.disc else None
         self.step = 0
         self.best_val: float | None = None
         self._stop = False
         (self.out / "config.json").write_text(json.dumps(asdict(cfg), indent=1))
 
+    def trainable(self) -> list[torch.nn.Parameter]:
+        """What this stage optimises: the frame head and encoder (frames), the head (head), all (windows)."""
+        if self.cfg.stage == "frames":
+            return [*self.net.encoder.parameters(), *self.frame_head.parameters()]
+        if self.cfg.stage == "head":
+            return list(self.net.head.parameters())
+        return list(self.net.parameters())
+
+    def init_from(self, path: str | Path) -> None:
+        """Model weights (not optimiser, step or RNG) from another run's checkpoint of the same architecture."""
+        ck = torch.load(path, map_location=self.device, weights_only=False)
+        if ck["model_config"] != self.model_cfg.to_dict():
+            raise ValueError(f"{path}: its model configuration differs from this run's; --init needs the same architecture")
+        self.net.load_state_dict(ck["model"])
+        if self.frame_head is not None and ck.get("frame_head"):
+            self.frame_head.load_state_dict(ck["frame_head"])
+
     # ---- batches ---------------------------------------------------------------------------
+    def sample(self) -> tuple[dict[str, torch.Tensor], dict[str, torch.Tensor]]:
+        """One batch of this stage → (outputs, targets)."""
+        from export.model.heads import OUTPUTS
+        from export.stages import FeatureCache, sample_frames
+
+        if self.cfg.stage == "windows":
+            chunk = self.sample_chunk()
+            return self.net.forward_chunk(chunk["x"]), chunk
+        if self.cfg.stage == "frames":
+            batch = sample_frames(self.tracks, self.weights, self.cfg.batch, self.pitch_m, self.rng, self.device)
+            return dict(zip(OUTPUTS, self.frame_head(self.net.encoder(batch["x"])))), batch
+        if self.cache is None:
+            t0 = time.monotonic()
+            self.cache = FeatureCache(self.net.encoder, self.tracks, self.pitch_m, self.cfg.cache_copies, self.cfg.seed,
+                                      device=self.device, progress=self._cache_progress if self.cfg.progress else None)
+            if self.cfg.progress:
+                print(f"\nfeature cache: {self.cfg.cache_copies} × {sum(len(t) for t in self.tracks)} frames in "
+                      f"{time.monotonic() - t0:.0f} s", file=sys.stderr)
+        batch = self.cache.sample(self.tracks, self.weights, self.cfg.batch, self.model_cfg.window, self.rng, self.device)
+        return dict(zip(OUTPUTS, self.net.head(batch["windows"]))), batch
+
+    @staticmethod
+    def _cache_progress(done: int, total: int) -> None:
+        print(f"\rfeature cache {done}/{total} frames", end="", file=sys.stderr, flush=True)
+
     def sample_chunk(self) -> dict[str, torch.Tensor]:
         """One chunk: B+T-1 frames of one track → inputs (N,1,H,W) and targets of the B windows."""
         from edge.infer.normalise import center_of_pressure_m
@@ -134,19 +203,23 @@ class Trainer:
         from export.losses import discriminator_loss, generator_losses
 
         self.net.train()
+        if self.cfg.stage == "head":
+            self.net.encoder.eval()
+        if self.frame_head is not None:
+            self.frame_head.train()
         totals: dict[str, float] = {}
         self.opt.zero_grad(set_to_none=True)
         fakes, reals = [], []
-        for _ in range(self.cfg.chunks):
-            chunk = self.sample_chunk()
-            out = self.net.forward_chunk(chunk["x"])
-            loss, parts, fake = generator_losses(out, chunk, self.body, self.model_cfg, self.disc)
-            (loss / self.cfg.chunks).backward()
+        repeats = self.cfg.chunks if self.cfg.stage == "windows" else 1
+        for _ in range(repeats):
+            out, target = self.sample()
+            loss, parts, fake = generator_losses(out, target, self.body, self.model_cfg, self.disc)
+            (loss / repeats).backward()
             fakes.append(fake)
-            reals.append(chunk["joints_m"])
+            reals.append(target["joints_m"])
             for k, v in {"loss": float(loss.detach()), **parts}.items():
-                totals[k] = totals.get(k, 0.0) + v / self.cfg.chunks
-        torch.nn.utils.clip_grad_norm_(self.net.parameters(), 5.0)
+                totals[k] = totals.get(k, 0.0) + v / repeats
+        torch.nn.utils.clip_grad_norm_(self.trainable(), 5.0)
         self.opt.step()
         if self.disc is not None:
             self.opt_d.zero_grad(set_to_none=True)
@@ -166,15 +239,18 @@ class Trainer:
             return {}
         net = self.net.to("cpu")
         try:
-            encode, head = torch_callables(net)
+            encode, head = torch_callables(net, self.frame_head.to("cpu") if self.frame_head is not None else None)
             return track_metrics(self.val_tracks, encode, head, self.model_cfg.window, self.pitch_m,
                                  BodyModel.load(self.model_cfg.body_model), frame_stride=self.cfg.val_frame_stride)
         finally:
             self.net.to(self.device)
+            if self.frame_head is not None:
+                self.frame_head.to(self.device)
 
     # ---- checkpoints ---------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
         return {"step": self.step, "model": self.net.state_dict(), "model_config": self.model_cfg.to_dict(),
+                "frame_head": self.frame_head.state_dict() if self.frame_head is not None else None,
                 "disc": self.disc.state_dict() if self.disc else None, "opt": self.opt.state_dict(),
                 "opt_d": self.opt_d.state_dict() if self.opt_d else None, "best_val": self.best_val,
                 "rng": {"numpy": self.rng.bit_generator.state, "torch": torch.get_rng_state(),
@@ -194,6 +270,8 @@ class Trainer:
         if ck["model_config"] != self.model_cfg.to_dict():
             raise ValueError(f"{path}: its model configuration differs from this run's")
         self.net.load_state_dict(ck["model"])
+        if self.frame_head is not None:
+            self.frame_head.load_state_dict(ck["frame_head"])
         self.opt.load_state_dict(ck["opt"])
         if self.disc is not None and ck["disc"] is not None:
             self.disc.load_state_dict(ck["disc"])

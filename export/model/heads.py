@@ -95,5 +95,19 @@ class MeanHead(nn.Module):
         return self.params(self.mlp(torch.cat([feats.mean(1), feats[:, -1]], -1)))
 
 
+class FrameHead(nn.Module):
+    """One frame's features (B,F) → parameters: the auxiliary head of the `frames` training stage
+    (an MLP, discarded after it; the encoder it trained is kept)."""
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        self.mlp = nn.Sequential(nn.Linear(cfg.features, cfg.d_model), nn.LayerNorm(cfg.d_model), nn.ReLU(),
+                                 nn.Linear(cfg.d_model, cfg.d_model), nn.ReLU())
+        self.params = ParamHead(cfg.d_model)
+
+    def forward(self, feats: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        return self.params(self.mlp(feats))
+
+
 def build_head(cfg: ModelConfig) -> nn.Module:
     return {"transformer": TransformerHead, "gru": GRUHead, "mean": MeanHead}[cfg.head](cfg)

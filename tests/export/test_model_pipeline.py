@@ -13,23 +13,12 @@ pytest.importorskip("onnxscript")
 from export.model import ModelConfig  # noqa: E402
 from export.train import TrainConfig, Trainer, load_model  # noqa: E402
 
-TINY = dict(encoder_widths=(8, 16), features=16, d_model=16, heads=2, ff=32, layers=1)
-
-
-@pytest.fixture(scope="module")
-def tiny_data(tmp_path_factory):
-    from sim.dataset.generate import generate
-
-    out = tmp_path_factory.mktemp("tiny32") / "data"
-    generate(out, subjects=3, seconds_per_activity=1.5, grid=32, pitch_mm=19.05 * 3, seed=3, workers=1, progress=False,
-             activities=("stepping", "squat", "lunge"))
-    return out
 
 
 def _trainer(data, out, steps, lr=3e-3, **kw):
     cfg = TrainConfig(data=str(data), out=str(out), steps=steps, batch=6, lr=lr, val_every=0, checkpoint_every=1000,
                       log_every=1, progress=False, seed=5, threads=1, **kw)
-    return Trainer(cfg, ModelConfig.preset("lean", **TINY))
+    return Trainer(cfg, ModelConfig.preset("tiny"))
 
 
 @pytest.fixture(scope="module")
