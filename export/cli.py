@@ -11,15 +11,21 @@ from edge.cli import CliError
 
 def register(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train the CAvatar model on a simulated dataset (needs the export extra)",
-                       description="Train the CAvatar model: chunks of consecutive frames are encoded once and unfolded "
-                       "into 40-frame windows. Checkpoints every N steps and on Ctrl-C; --resume continues a run.")
-    t.add_argument("--data", required=True, help="dataset folder (cavatar sim generate)")
+                       description="Train the CAvatar model in stages (export/stages.py): --stage frames (encoder, frames "
+                       "drawn independently), --stage head (encoder frozen, cached features, windows drawn independently), "
+                       "--stage windows (end to end: chunks of consecutive frames encoded once, unfolded into 40-frame "
+                       "windows). --init starts a stage from another run's weights. Checkpoints every N steps and on "
+                       "Ctrl-C; --resume continues a run. `make model` runs the shipped recipe.")
+    t.add_argument("--data", required=True, action="append",
+                   help="dataset folder (cavatar sim generate); repeat to train on several of one grid")
+    t.add_argument("--stage", default="windows", choices=("frames", "head", "windows"), help="training stage (default windows)")
+    t.add_argument("--init", default="", help="checkpoint whose model weights start this run (e.g. the previous stage's best.pt)")
     t.add_argument("--out", required=True, help="run folder: config.json, checkpoint.pt, best.pt, log.jsonl")
     t.add_argument("--preset", default="lean", choices=("lean", "paper"), help="architecture (default lean)")
     t.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a model config field, e.g. --set head=gru --set discriminator=false (ablations)")
     t.add_argument("--steps", type=int, default=5000, help="total steps (default 5000)")
-    t.add_argument("--batch", type=int, default=32, help="windows per chunk (default 32)")
+    t.add_argument("--batch", type=int, default=32, help="windows per chunk (windows); frames or windows per step (frames, head)")
     t.add_argument("--chunks", type=int, default=1, help="chunks per step (default 1)")
     t.add_argument("--lr", type=float, default=1e-4, help="Adam learning rate (default 1e-4)")
     t.add_argument("--weight-decay", type=float, default=1e-3, help="Adam weight decay (default 1e-3)")
@@ -42,6 +48,36 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--name", required=True, help="bundle name, e.g. lean-96")
     b.add_argument("--precision", default="int8", choices=("int8", "fp32"))
     b.set_defaults(func=run_bundle)
+
+    e = sub.add_parser("eval", help="evaluate a model bundle on simulated subjects: paper-shaped tables (needs the export extra)",
+                       description="Run a bundle as the board loads it on a dataset split and write the paper's tables: "
+                       "MPJPE (24 joints) and PVE (full mesh), both pelvis-aligned, and the translation error, in cm, "
+                       "overall and per activity, subject, number of people and joint, beside the mean-pose baseline.")
+    e.add_argument("--bundle", required=True, help="model bundle folder")
+    e.add_argument("--data", required=True, action="append", help="dataset folder; repeat to pool several")
+    e.add_argument("--split", default="test", choices=("test", "val", "train", "all"),
+                   help="split to evaluate (default test: subjects never seen in training; 'all' for a dataset of new subjects)")
+    e.add_argument("--stride", type=int, default=2, help="evaluate every Nth frame (default 2)")
+    e.add_argument("--people", default="", help="only tracks from scenes with this many people, e.g. 2 or 2..3")
+    e.add_argument("--out", required=True, help="output prefix: writes PREFIX.json and PREFIX.md")
+    e.add_argument("--title", default="", help="title of the Markdown table")
+    e.set_defaults(func=run_eval)
+
+    f = sub.add_parser("finetune", help="fine-tune a bundle on a new user's data (needs the export extra)",
+                       description="Fine-tune a bundle on the first FRACTION of every track of a new user's recording "
+                       "(lr 3e-5, the paper's recipe), hold out the rest in time, and write a new bundle (int8 gate and all).")
+    f.add_argument("--bundle", required=True, help="bundle to start from (must carry weights.npz)")
+    f.add_argument("--data", required=True, help="the user's dataset folder")
+    f.add_argument("--fraction", type=float, required=True, help="fraction of every track to train on, e.g. 0.5")
+    f.add_argument("--out", required=True, help="bundle folder to write")
+    f.add_argument("--subject", action="append", default=[], help="only these subjects (e.g. s06); default all")
+    f.add_argument("--split", default="all", choices=("test", "val", "train", "all"), help="dataset split (default all)")
+    f.add_argument("--steps", type=int, default=300, help="optimiser steps (default 300)")
+    f.add_argument("--lr", type=float, default=3e-5, help="learning rate (default 3e-5)")
+    f.add_argument("--stage", default="windows", choices=("windows", "head"),
+                   help="windows: whole model end to end (the paper); head: temporal head only, cached features (fast)")
+    f.add_argument("--threads", type=int, default=1)
+    f.set_defaults(func=run_finetune)
 
 
 def _parse_sets(items: list[str]) -> dict:
@@ -67,7 +103,7 @@ def run_train(args: argparse.Namespace) -> int:
         model_cfg = ModelConfig.preset(args.preset, **_parse_sets(args.set))
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
-    cfg = TrainConfig(data=args.data, out=args.out, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr,
+    cfg = TrainConfig(data=args.data, out=args.out, stage=args.stage, init=args.init, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr,
                       weight_decay=args.weight_decay, optimizer=args.optimizer, seed=args.seed, checkpoint_every=args.checkpoint_every,
                       val_every=args.val_every, device=args.device, threads=args.threads)
     from sim.dataset import DatasetError
@@ -91,4 +127,80 @@ def run_bundle(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     print(json.dumps({k: report[k] for k in ("mpjpe_fp32_cm", "mpjpe_int8_fake_quant_cm", "gate_passed", "head_quantization")}))
     print(f"wrote {args.out}")
+    return 0
+
+
+def _people_filter(text: str) -> tuple[int, int] | None:
+    if not text:
+        return None
+    lo, _, hi = text.partition("..")
+    try:
+        return int(lo), int(hi or lo)
+    except ValueError:
+        raise CliError(f"--people takes N or LO..HI, got {text!r}") from None
+
+
+def run_eval(args: argparse.Namespace) -> int:
+    try:
+        import numpy as np
+
+        from export.finetune import user_tracks
+        from export.tables import evaluate_bundle, markdown
+    except ImportError as exc:
+        raise CliError(f"evaluation needs the export extra (pip install '.[export]'): {exc}") from None
+    from pathlib import Path
+
+    from edge.infer import BundleError, verify
+    from sim.dataset import DatasetError
+
+    try:
+        manifest = verify(args.bundle)
+        tracks, pitch = [], None
+        for d in args.data:
+            t, p, _ = user_tracks(d, args.split)
+            if pitch is not None and p != pitch:
+                raise ValueError(f"{d}: pitch {p} m differs from the other datasets' {pitch} m")
+            tracks, pitch = tracks + t, p
+    except (BundleError, DatasetError, ValueError) as exc:
+        raise CliError(str(exc)) from None
+    people = _people_filter(args.people)
+    if people:
+        tracks = [t for t in tracks if people[0] <= t.people <= people[1]]
+        if not tracks:
+            raise CliError(f"no tracks from scenes of {args.people} people in {args.data}")
+    base = manifest.get("baseline")
+    baseline = (np.array(base["pose_aa"]), np.array(base["betas"]), float(base["pelvis_height_m"])) if base else None
+    result = evaluate_bundle(args.bundle, tracks, pitch, frame_stride=args.stride, baseline=baseline)
+    result["setup"] = {"bundle": f"{manifest['name']}@{manifest['files']['encoder.onnx'][:12]}", "data": args.data,
+                       "split": args.split, "people": args.people or "all", "frame_stride": args.stride,
+                       "tracks": len(tracks), "subjects": sorted({f"s{t.subject:02d}" for t in tracks}),
+                       "baseline": "mean training pose at the centre of pressure" if baseline else "none (bundle has no baseline)",
+                       "precision": manifest.get("quantization", {}).get("precision", "fp32")}
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    title = args.title or f"{manifest['name']} on {args.split} ({', '.join(result['setup']['subjects'])})"
+    out.with_suffix(".json").write_text(json.dumps(result, indent=1) + "\n")
+    out.with_suffix(".md").write_text(markdown(result, title))
+    o = result["overall"]
+    print(f"MPJPE {o['mpjpe_cm']:.2f} cm, PVE {o['pve_cm']:.2f} cm, translation {o['transl_cm']:.2f} cm over {o['frames']} frames"
+          + (f"; baseline MPJPE {result['baseline']['mpjpe_cm']:.2f} cm" if baseline else ""))
+    print(f"wrote {out.with_suffix('.json')} and {out.with_suffix('.md')}")
+    return 0
+
+
+def run_finetune(args: argparse.Namespace) -> int:
+    try:
+        from export.finetune import finetune
+    except ImportError as exc:
+        raise CliError(f"fine-tuning needs the export extra (pip install '.[export]'): {exc}") from None
+    from edge.infer import BundleError
+    from sim.dataset import DatasetError
+
+    try:
+        report = finetune(args.bundle, args.data, args.fraction, args.out, steps=args.steps, lr=args.lr, stage=args.stage,
+                          split=args.split, subjects=args.subject or None, threads=args.threads)
+    except (BundleError, DatasetError, ValueError, RuntimeError) as exc:
+        raise CliError(str(exc)) from None
+    m = report["metrics"]
+    print(f"held-out MPJPE {m['mpjpe_cm']:.2f} cm over {m['frames']} frames (fp32 {m['mpjpe_fp32_cm']:.2f}); wrote {args.out}")
     return 0

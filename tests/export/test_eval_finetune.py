@@ -1,0 +1,100 @@
+"""`cavatar eval` tables, the mean-pose baseline, bundle weights and `cavatar finetune`, on a tiny model."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("onnxscript")
+
+from edge.cli import main  # noqa: E402
+from export.model import ModelConfig  # noqa: E402
+from export.train import TrainConfig, Trainer  # noqa: E402
+
+PITCH = 19.05e-3 * 3
+
+
+@pytest.fixture(scope="module")
+def bundle(tiny_data, tmp_path_factory):
+    from export.bundle import build_bundle
+
+    run = tmp_path_factory.mktemp("evalrun")
+    cfg = TrainConfig(data=str(tiny_data), out=str(run), stage="frames", steps=30, batch=16, lr=3e-3, optimizer="adamw",
+                      val_every=0, progress=False, seed=2, threads=1)
+    Trainer(cfg, ModelConfig.preset("tiny")).run()
+    out = tmp_path_factory.mktemp("bundles") / "tiny-32"
+    build_bundle(run / "checkpoint.pt", tiny_data, out, "tiny-32", max_eval_tracks=2)
+    return out
+
+
+def test_bundle_carries_its_weights_and_baseline(bundle, tiny_data):
+    from edge.infer import ModelBundle
+    from export.bundle import load_net
+    from export.data import load_tracks
+    from export.evaluate import track_inputs
+
+    net, manifest = load_net(bundle)
+    assert "weights.npz" in manifest["files"] and len(manifest["baseline"]["pose_aa"]) == 72
+    x = track_inputs(load_tracks(tiny_data, "train", max_tracks=1)[0], PITCH, 0)[0][:3]
+    with torch.no_grad():
+        ref = net.encoder(torch.from_numpy(x)).numpy()
+    b = ModelBundle.load(bundle)
+    assert np.abs(b.encode(x) - ref).max() < 0.1 * np.abs(ref).max()  # int8 encoder against the float weights
+
+
+def test_tables_are_zero_for_the_truth_and_positive_for_the_baseline(tiny_data):
+    from export.data import load_tracks
+    from export.tables import _bodies, _errors, baseline_errors, mean_pose, summarise
+
+    lite, full = _bodies()
+    tr = load_tracks(tiny_data, "test")[0]
+    frames = np.arange(0, len(tr), 5)
+    truth = _errors(tr.pose_aa[frames], tr.betas[frames], tr.transl_m[frames], tr, frames, lite, full)
+    assert truth["mpjpe_cm"].max() < 1e-3 and truth["pve_cm"].max() < 1e-3 and truth["transl_cm"].max() < 1e-6
+    base = baseline_errors(mean_pose(load_tracks(tiny_data, "train")), [tr], PITCH, frame_stride=5, bodies=(lite, full))
+    assert base["mpjpe_cm"].mean() > 1.0 and base["pve_cm"].mean() > 1.0
+    s = summarise(truth, base)
+    assert s["overall"]["mpjpe_vs_baseline"] < 1e-3 and len(s["by_joint_cm"]) == 24
+
+
+def test_eval_cli_writes_json_and_markdown(bundle, tiny_data, tmp_path, capsys):
+    assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--split", "all", "--stride", "4",
+                 "--out", str(tmp_path / "t" / "tiny")]) == 0
+    result = json.loads((tmp_path / "t" / "tiny.json").read_text())
+    md = (tmp_path / "t" / "tiny.md").read_text()
+    assert {"stepping", "squat", "lunge"} <= set(result["by_activity"]) <= {"stepping", "squat", "lunge", "standing"}
+    assert len(result["setup"]["subjects"]) == 3 and result["baseline"]["mpjpe_cm"] > 0
+    for row in result["by_activity"].values():
+        assert np.isfinite([row["mpjpe_cm"], row["pve_cm"], row["transl_cm"]]).all()
+    assert "### per activity" in md and "mean pose at CoP (baseline)" in md and "| left_wrist |" in md
+    assert "MPJPE" in capsys.readouterr().out
+    assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--people", "3", "--out", str(tmp_path / "x")]) == 2
+
+
+def test_finetune_splits_in_time_and_writes_a_new_bundle(bundle, tiny_data, tmp_path):
+    from edge.infer import ModelBundle
+    from export.data import load_tracks
+    from export.finetune import split_in_time
+
+    tracks = load_tracks(tiny_data, "test")
+    head, rest = split_in_time(tracks, 0.5)
+    assert sum(map(len, head)) + sum(map(len, rest)) == sum(map(len, tracks))
+    np.testing.assert_array_equal(head[0].pose_aa[-1], tracks[0].pose_aa[len(head[0]) - 1])
+    np.testing.assert_array_equal(rest[0].pose_aa[0], tracks[0].pose_aa[len(head[0])])
+    with pytest.raises(ValueError, match="fraction"):
+        split_in_time(tracks, 1.0)
+
+    out = tmp_path / "ft"
+    assert main(["finetune", "--bundle", str(bundle), "--data", str(tiny_data), "--split", "test", "--fraction", "0.5",
+                 "--steps", "3", "--out", str(out)]) == 0
+    m = ModelBundle.load(out).manifest
+    assert m["training"]["finetuned_from"].startswith("tiny-32@") and m["training"]["fraction"] == 0.5
+    assert m["name"] == "tiny-32-ft50" and m["baseline"] == json.loads((bundle / "manifest.json").read_text())["baseline"]
+    before = np.load(bundle / "weights.npz")
+    after = np.load(out / "weights.npz")
+    assert any(not np.array_equal(before[k], after[k]) for k in before.files)  # it trained
+    assert main(["finetune", "--bundle", str(bundle), "--data", str(tiny_data), "--fraction", "1.2", "--out", str(tmp_path / "no")]) == 2
+    assert not (tmp_path / "no").exists()
