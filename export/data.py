@@ -14,7 +14,7 @@ edge.scene's per-person masks). A single person's input is the whole frame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
@@ -40,6 +40,12 @@ class Track:
 
     def __len__(self) -> int:
         return len(self.pose_aa)
+
+    def slice(self, start: int, stop: int) -> "Track":
+        """Frames start:stop of this track (views, no copy)."""
+        s = slice(start, stop)
+        return replace(self, pressure_kpa=self.pressure_kpa[s], pose_aa=self.pose_aa[s], betas=self.betas[s],
+                       transl_m=self.transl_m[s], joints_m=self.joints_m[s], activity=self.activity[s])
 
 
 def person_masks(pressure_kpa: np.ndarray, joints_m: np.ndarray, present: np.ndarray, pitch_m: float,
@@ -118,3 +124,17 @@ def chunk_indices(length: int, start: int, frames: int) -> np.ndarray:
     """Frame indices of a chunk starting at ``start`` (may be negative: the runtime pads a new
     track's history with its first frame, and so do we)."""
     return np.clip(np.arange(start, start + frames), 0, length - 1)
+
+
+def without_activities(tracks: list[Track], names: list[str]) -> list[Track]:
+    """The tracks cut around every frame of the named activities (leave-one-activity-out training)."""
+    from sim.motion import ACTIVITIES
+
+    unknown = [n for n in names if n not in ACTIVITIES]
+    if unknown:
+        raise ValueError(f"unknown activities {unknown}; known: {list(ACTIVITIES)}")
+    drop = [ACTIVITIES.index(n) for n in names]
+    out = []
+    for t in tracks:
+        out += [t.slice(a, b) for a, b in _runs(~np.isin(t.activity, drop))]
+    return out

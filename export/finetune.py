@@ -10,7 +10,6 @@ training frame in the same window. ``fraction=0`` only evaluates. The result is 
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -33,9 +32,7 @@ def split_in_time(tracks: list[Track], fraction: float, min_frames: int = 2) -> 
 
 
 def track_slice(t: Track, start: int, stop: int) -> Track:
-    s = slice(start, stop)
-    return replace(t, pressure_kpa=t.pressure_kpa[s], pose_aa=t.pose_aa[s], betas=t.betas[s], transl_m=t.transl_m[s],
-                   joints_m=t.joints_m[s], activity=t.activity[s])
+    return t.slice(start, stop)
 
 
 def user_tracks(data: str | Path, split: str = "all", subjects: list[str] | None = None) -> tuple[list[Track], float, Any]:

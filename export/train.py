@@ -43,6 +43,7 @@ class TrainConfig:
     stage: str = "windows"          # "frames", "head" or "windows" (export/stages.py)
     init: str = ""                  # checkpoint whose model (and frame head) weights start this run
     cache_copies: int = 2           # stage "head": corruption copies of every frame in the feature cache
+    exclude_activities: list[str] = field(default_factory=list)  # leave-one-activity-out: these never train
     steps: int = 5000
     batch: int = 32                 # B windows per chunk
     chunks: int = 1                 # chunks (of different tracks) per step
@@ -107,6 +108,10 @@ class Trainer:
         cfg.model = self.model_cfg.to_dict()
         self.tracks = tracks if tracks is not None else [t for d in datasets for t in load_tracks(d, "train")]
         self.val_tracks = val_tracks if val_tracks is not None else load_tracks(ds, "val")
+        if cfg.exclude_activities:
+            from export.data import without_activities
+
+            self.tracks = without_activities(self.tracks, cfg.exclude_activities)
         self.tracks = [t for t in self.tracks if len(t) >= 2]
         if not self.tracks:
             raise ValueError(f"{cfg.data}: no training tracks")

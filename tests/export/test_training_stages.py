@@ -93,3 +93,14 @@ def test_several_datasets_and_a_wrong_init(tiny_data, tmp_path):
     one.run()
     with pytest.raises(ValueError, match="same architecture"):
         Trainer(cfg, other)
+
+
+def test_leave_one_activity_out_never_trains_on_it(tiny_data, tmp_path):
+    from sim.motion import ACTIVITIES
+
+    tr = _trainer(str(tiny_data), tmp_path, "frames", 1, exclude_activities=["squat"])
+    assert tr.tracks and all((t.activity != ACTIVITIES.index("squat")).all() for t in tr.tracks)
+    full = _trainer(str(tiny_data), tmp_path / "all", "frames", 1)
+    assert sum(map(len, tr.tracks)) < sum(map(len, full.tracks))
+    with pytest.raises(ValueError, match="unknown activities"):
+        _trainer(str(tiny_data), tmp_path / "x", "frames", 1, exclude_activities=["juggling"])
