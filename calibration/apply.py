@@ -53,7 +53,10 @@ class Applier:
     def apply(self, counts: np.ndarray, temperature_c: float | None = None) -> Applied:
         if counts.shape != self.baseline.shape:
             raise ValueError(f"frame is {counts.shape}, the calibration is for {self.baseline.shape}")
-        c = counts.astype(np.float32)
+        # A code outside [0, full scale] is not a reading (CalibratedFrames rejects such frames):
+        # clipped to the ADC range it reads as the rail it passed, and cannot overflow the
+        # crosstalk inverse below.
+        c = np.clip(counts.astype(np.float32), 0.0, np.float32(self.cal.full_scale))
         delta = self.sign * (c - self.baseline)
         delta[delta < self.gate] = 0.0
         r = delta * self.scale
@@ -80,6 +83,12 @@ class Applier:
         """
         g_app = r_app * self.gain
         g = g_app
+        # r(p) < 1 at every pressure, so a sensel whose corrected response reaches 1 is saturated
+        # whatever its exact value: capping g at gain · 1 keeps the iteration finite where heavy
+        # loads on whole lines make it diverge (an all-saturated carpet reached 1e8 and overflowed);
+        # the iterates grow monotonically, so a frame where no sensel reaches 1 is unchanged.
+        g_max = self.gain
         for _ in range(iterations):
             g = g_app * (1.0 + self.crosstalk_r * g.sum(axis=0, keepdims=True)) * (1.0 + self.crosstalk_r * g.sum(axis=1, keepdims=True))
+            g = np.minimum(g, g_max)
         return g / self.gain

@@ -89,6 +89,31 @@ class Calibration:
     created: str = field(default_factory=lambda: datetime.now(timezone.utc).isoformat(timespec="seconds"))
     sha256: str = ""
 
+    def __post_init__(self) -> None:
+        self.check_arrays()
+
+    def check_arrays(self) -> None:
+        """Refuse per-sensel values that no procedure writes (CalibrationError naming how many).
+
+        NaN/∞ in ``baseline_counts``, ``noise_counts`` or ``gain`` (anywhere: one NaN gain
+        would poison the crosstalk inverse's line sums and zero the whole carpet), and a gain
+        ≤ 0 on a usable sensel (the procedures write 0.5–2; dividing by it would read pressure
+        as negative or infinite). A masked sensel's gain is never used, so it is not checked.
+        """
+        for name in ("baseline_counts", "noise_counts", "gain"):
+            bad = ~np.isfinite(np.asarray(getattr(self, name), np.float64))
+            if bad.any():
+                r, c = np.argwhere(bad)[0]
+                raise CalibrationError(f"calibration {name} has {int(bad.sum())} NaN/∞ value(s) (first at row {r}, "
+                                       f"col {c}): the file is damaged; recalibrate with `cavatar calibrate`")
+        fault = np.asarray(self.fault)
+        bad = (np.asarray(self.gain) <= 0) & ((fault & UNUSABLE) == 0)
+        if bad.any():
+            r, c = np.argwhere(bad)[0]
+            raise CalibrationError(f"calibration gain is zero or negative at {int(bad.sum())} usable sensel(s) (first at "
+                                   f"row {r}, col {c}); gains must be > 0 (the procedures write 0.5–2): recalibrate, "
+                                   "or flag those sensels dead in `fault`")
+
     @property
     def shape(self) -> tuple[int, int]:
         return self.baseline_counts.shape
@@ -177,10 +202,13 @@ class Calibration:
         arrays = {k: np.ascontiguousarray(a, dtype=ARRAYS[k]) for k, a in arrays.items()}
         if cls._digest(arrays, json.dumps(meta, sort_keys=True)) != stored:
             raise CalibrationError(f"{path} is damaged: its contents do not match the SHA-256 it records; recalibrate")
-        cal = cls(**arrays, device=meta["device"], pitch_m=meta["pitch_m"], curve=Curve(**meta["curve"]),
-                  crosstalk_r_norm=meta["crosstalk_r_norm"], temperature_c=meta["temperature_c"],
-                  temp_coeff_per_c=meta["temp_coeff_per_c"], line_faults=meta["line_faults"], steps=meta["steps"],
-                  validation=meta["validation"], created=meta["created"], sha256=stored)
+        try:
+            cal = cls(**arrays, device=meta["device"], pitch_m=meta["pitch_m"], curve=Curve(**meta["curve"]),
+                      crosstalk_r_norm=meta["crosstalk_r_norm"], temperature_c=meta["temperature_c"],
+                      temp_coeff_per_c=meta["temp_coeff_per_c"], line_faults=meta["line_faults"], steps=meta["steps"],
+                      validation=meta["validation"], created=meta["created"], sha256=stored)
+        except CalibrationError as exc:
+            raise CalibrationError(f"{path}: {exc}") from None
         if cal.shape != (meta["device"]["rows"], meta["device"]["cols"]):
             raise CalibrationError(f"{path}: arrays are {cal.shape}, the device record says {meta['device']['rows']}×{meta['device']['cols']}")
         return cal

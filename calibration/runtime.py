@@ -95,6 +95,10 @@ class BaselineConfig:
         return {f.name: f"{f.metadata['doc']} (default {f.default!r})" for f in dataclasses.fields(cls)}
 
 
+_RAIL_MARGIN_COUNTS = 2.0  # within this of the rail a mean reading is censored (as Applier's rail_margin_counts)
+_MIN_STEP_SENSELS = 8  # a tile needs this many usable sensels before its spread can call an offset step
+
+
 def _block_index(shape: tuple[int, int], blocks: tuple[int, int]) -> np.ndarray:
     """(H, W) int: the tile of each sensel, tiles from ``np.array_split`` bounds, row-major."""
     def along(n: int, parts: int) -> np.ndarray:
@@ -143,6 +147,7 @@ class BaselineTracker:
                                                    minlength=self.n_blocks), 1)
         self._sigma_median = float(np.median(self.sigma[self.usable])) if self.usable.any() else 1.0
         self.common = np.zeros(self.n_blocks, np.float32)  # counts toward the rail
+        self.rail = 0.0 if self.sign < 0 else float(cal.full_scale)
         self.last_contact_s = np.full(self.shape, -np.inf)
         self.grow = max(int(round(cfg.neighbour_mm * 1e-3 / cal.pitch_m)), 0)
         self._sum = np.zeros(self.shape, np.float64)
@@ -177,8 +182,15 @@ class BaselineTracker:
         contact = ((d - cm_map) > thr) & self.usable
         step = False
         if cfg.enabled:
-            in_contact = np.bincount(self._blocks_flat, weights=contact.ravel(), minlength=self.n_blocks)
-            for b in np.nonzero(in_contact > cfg.step_fraction * self._usable_size)[0]:
+            # A reading at the rail is censored (at least that far, not how far the offset moved), and
+            # an IQR over a handful of sensels says nothing: neither may call an offset step, or an
+            # all-saturated second (or one live sensel under a foot) becomes the baseline and the
+            # carpet then reads empty for many minutes.
+            railed = np.abs(mean - self.rail) <= _RAIL_MARGIN_COUNTS
+            step_contact = (contact & ~railed).ravel()
+            in_contact = np.bincount(self._blocks_flat, weights=step_contact, minlength=self.n_blocks)
+            big = self._usable_size >= _MIN_STEP_SENSELS
+            for b in np.nonzero((in_contact > cfg.step_fraction * self._usable_size) & big)[0]:
                 # most of a tile "in contact": people give readings spread over hundreds of
                 # counts, an offset step moves every sensel alike
                 v = d[self._block_sel[b] & self.usable]
@@ -374,7 +386,7 @@ class CalibratedFrames:
         lo, hi = live.min(), live.max()
         if lo < 0 or hi > self.full_scale:
             return "out_of_range", None, None
-        if lo == hi:
+        if lo == hi and live.size > 1:  # one usable sensel cannot tell a frozen front end from a still one
             return "constant", None, None
         return None, counts, bad
 

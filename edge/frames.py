@@ -15,7 +15,10 @@ Policy for a frame that is not whole (documented in README and SPEC.md):
 
 Device time ``t_us`` (u32) is unwrapped across 2^32 µs into ``RawFrame.t_s`` (seconds
 since the first frame of this source); intervals outside (0, 10 nominal periods] count
-as ``time_jumps``.
+as ``time_jumps``. ``t_s`` always increases: where the device clock cannot say how much
+time passed (the device restarted, its clock stood still, or it stepped back, i.e. an
+interval over 2^31 µs that the host clock did not see pass), ``t_s`` advances by the
+nominal period per frame and a ``time_jumps`` is counted.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import time
 import zlib
 from collections import Counter
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -82,6 +85,7 @@ class FrameAssembler:
         wiring: WiringMap | None = None,
         missing_rows: str = "drop",
         max_missing_rows: int = 4,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         if missing_rows not in ("drop", "flag"):
             raise ValueError("missing_rows must be 'drop' or 'flag'")
@@ -106,6 +110,8 @@ class FrameAssembler:
         self._t0_us: int | None = None
         self._t_total_us = 0
         self._t_last_us: int | None = None
+        self._clock = clock  # host seconds: tells a long pause from a device clock that stepped back
+        self._host_last_s: float | None = None
 
     def reset(self) -> None:
         """Forget the frame in progress (after a reconnect); keeps counters and continuity."""
@@ -181,7 +187,7 @@ class FrameAssembler:
         return [RawFrame(self.wiring.apply(wire), seq, self._index, t_s, time.time(), stale)]
 
     def _continuity(self, seq: int, t_us: int) -> bool:
-        last, step = self._last_seq, 1
+        last, step, restarted = self._last_seq, 1, False
         if last is not None:
             step = (seq - last) % U32
             if step == 0:
@@ -189,16 +195,25 @@ class FrameAssembler:
                 return False
             if step >= U32 // 2:
                 self.counters["seq_restarts"] += 1
-                step = 1
+                step, restarted = 1, True
             self.counters["missed_frames"] += step - 1
             self._index += step
         else:
             self._index = 0
         self._last_seq = seq
+        host_s = self._clock()
         if self._t_last_us is not None:
             dt = (t_us - self._t_last_us) % U32
-            if self.period_us and not (0 < dt <= 10 * self.period_us * max(1, step)):
+            # A restarted device restarted its clock too, and "more than half a wrap forward" is
+            # a clock that stepped back unless the host saw that long pass: taken at face value
+            # either added up to 71.6 bogus minutes. Then t_s moves on by the nominal period.
+            back = dt >= U32 // 2 and host_s - self._host_last_s < 0.5 * dt * 1e-6
+            if restarted or back or dt == 0:
+                self.counters["time_jumps"] += 1
+                dt = max(int(round(self.period_us * step)), 1)
+            elif self.period_us and not dt <= 10 * self.period_us * max(1, step):
                 self.counters["time_jumps"] += 1
             self._t_total_us += dt
         self._t_last_us = t_us
+        self._host_last_s = host_s
         return True

@@ -75,20 +75,27 @@ def _euler_xyz_to_axis_angle(deg) -> np.ndarray:
 
 
 def matrix_to_axis_angle(r: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3,3) → axis-angle (3,), angle in [0, π]; robust near 0 and π."""
-    cos = np.clip((np.trace(r) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(cos)
-    vee = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-    if angle < 1e-6:
-        return 0.5 * vee
-    if np.pi - angle < 1e-4:  # near π: the axis from the symmetric part
-        s = (r + np.eye(3)) / 2.0
-        k = int(np.argmax(np.diag(s)))
-        axis = s[k] / np.sqrt(s[k, k])
-        if np.dot(axis, vee) < 0:
-            axis = -axis
-        return axis * angle
-    return vee / (2.0 * np.sin(angle)) * angle
+    """Rotation matrix (3,3) → axis-angle (3,), angle in [0, π]; accurate to round-off at every angle.
+
+    The angle is atan2(sin θ, cos θ) (an arccos of the trace loses half the digits near 0 and
+    π). The axis comes from the antisymmetric part while cos θ ≥ 0, and from the symmetric part
+    (1 − cos θ)·a·aᵀ beyond, where sin θ → 0: the raw rows of R + I used before carried the
+    sin θ·[a]× term and were off by up to 4e-5 rad just below π.
+    """
+    from edge.body.rotations import sinc
+
+    r = np.asarray(r, dtype=np.float64)
+    vee = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])  # 2 sin θ · a
+    cos = (np.trace(r) - 1.0) / 2.0
+    angle = float(np.arctan2(0.5 * np.linalg.norm(vee), cos))
+    if cos >= 0.0:
+        return 0.5 * vee / sinc(angle)
+    sym = 0.5 * (r + r.T) - cos * np.eye(3)  # (1 − cos θ) · a aᵀ
+    row = sym[int(np.argmax(np.diag(sym)))]
+    axis = row / np.linalg.norm(row)
+    if np.dot(axis, vee) < 0:
+        axis = -axis
+    return axis * angle
 
 
 def pose_aa(name: str) -> np.ndarray:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from edge.provenance import sha256_file  # noqa: F401  (re-exported: export and tests use it from here)
-from edge.infer.normalise import NORMALISATION, center_of_pressure_m, normalise_kpa
+from edge.infer.normalise import NORMALISATION, center_of_pressure_m, check_finite, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
 
 SCHEMA = "cavatar.bundle/1"
@@ -137,11 +137,11 @@ class ModelBundle:
         norm = self.manifest["input"]["normalisation"]
         if norm.get("kind") != NORMALISATION["kind"]:
             raise BundleError(f"{self.folder}: unknown input normalisation {norm!r}")
-        return normalise_kpa(pressure_kpa, float(norm["scale_kpa"]))
+        return normalise_kpa(check_finite(pressure_kpa), float(norm["scale_kpa"]))
 
     def origin_m(self, pressure_kpa: np.ndarray) -> np.ndarray:
         """(…,H,W) → (…,3) the translation origin: the person's centre of pressure, z = 0."""
-        cop = center_of_pressure_m(pressure_kpa, self.pitch_m)
+        cop = center_of_pressure_m(check_finite(pressure_kpa), self.pitch_m)
         return np.concatenate([cop, np.zeros(cop.shape[:-1] + (1,))], -1)
 
     def encode(self, frames: np.ndarray) -> np.ndarray:
@@ -149,7 +149,12 @@ class ModelBundle:
         x = np.ascontiguousarray(frames, np.float32)
         if x.ndim != 4 or x.shape[1:] != (1, *self.grid):
             raise ValueError(f"encode expects (B,1,{self.grid[0]},{self.grid[1]}), got {x.shape}")
-        return self._encoder.run(None, {self._enc_name: x})[0]
+        # The int8 encoder's QuantizeLinear maps NaN to an arbitrary code: its features would look
+        # valid and be published. Refuse instead (nothing NaN is ever published).
+        check_finite(x, "encode input (normalised pressure)")
+        features = self._encoder.run(None, {self._enc_name: x})[0]
+        _check_outputs(self.folder / "encoder.onnx", {"features": features})
+        return features
 
     def head(self, features: np.ndarray, origin_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """(B,T,F) features → pose_aa (B,72), betas (B,10), transl_m (B,3), transl_rel_m (B,3),
@@ -161,7 +166,9 @@ class ModelBundle:
         w = np.ascontiguousarray(features, np.float32)
         if w.ndim != 3 or w.shape[1:] != (self.window, self.features):
             raise ValueError(f"head expects (B,{self.window},{self.features}), got {w.shape}")
+        check_finite(w, "head input (window features)")
         out = dict(zip([o.name for o in self._head.get_outputs()], self._head.run(None, {self._head_name: w})))
+        _check_outputs(self.folder / "head.onnx", {k: out[k] for k in HEAD_OUTPUTS})
         logits = out["activity_logits"].astype(np.float64)
         probs = np.exp(logits - logits.max(-1, keepdims=True))
         probs /= probs.sum(-1, keepdims=True)
@@ -170,6 +177,14 @@ class ModelBundle:
         return {"pose_aa": rot6d_to_axis_angle(out["rot6d"]), "betas": out["betas"].astype(np.float32),
                 "transl_m": rel + origin, "transl_rel_m": rel, "activity_probs": probs.astype(np.float32),
                 "confidence": out["confidence"].astype(np.float32).reshape(-1)}
+
+
+def _check_outputs(graph: Path, outputs: dict[str, np.ndarray]) -> None:
+    """A graph that overflowed on finite input must not publish NaN/∞ as a body: ValueError naming it."""
+    bad = [k for k, v in outputs.items() if not np.isfinite(v).all()]
+    if bad:
+        raise ValueError(f"{graph}: output(s) {', '.join(bad)} hold NaN/∞ for a finite input; this frame is "
+                         "refused (if it keeps happening the bundle is broken: re-export it)")
 
 
 def check_body(manifest: dict[str, Any], folder: Path) -> None:

@@ -16,13 +16,39 @@ import numpy as np
 NORMALISATION = {"kind": "log1p", "scale_kpa": 1.0, "formula": "x = log1p(pressure_kpa / scale_kpa), negatives clipped to 0"}
 
 
+def check_finite(pressure_kpa: np.ndarray, what: str = "pressure_kpa") -> np.ndarray:
+    """Return ``pressure_kpa`` as an array, or raise ValueError if any value is NaN or ±∞.
+
+    NaN and ∞ are rejected upstream, never normalised: ``normalise_kpa`` would pass them
+    through (log1p(NaN) = NaN, log1p(∞) = ∞) into the encoder, and the centre of pressure of
+    a frame holding one ∞ is NaN. The scene's frame check masks or rejects such sensels first;
+    this is the last gate before the model.
+    """
+    p = np.asarray(pressure_kpa)
+    bad = ~np.isfinite(p)
+    if bad.any():
+        nan = int(np.isnan(p).sum())
+        raise ValueError(f"{what} holds {nan} NaN and {int(bad.sum()) - nan} infinite value(s) of {p.size} "
+                         f"(first at index {tuple(int(i) for i in np.argwhere(bad)[0])}); reject the frame before "
+                         "inference (edge.scene.check_frame masks or rejects NaN/∞ sensels)")
+    return p
+
+
 def normalise_kpa(pressure_kpa: np.ndarray, scale_kpa: float = 1.0) -> np.ndarray:
-    """(…,H,W) kPa → model input (same shape) float32."""
+    """(…,H,W) kPa → model input (same shape) float32.
+
+    Negatives read as 0. NaN and +∞ pass through unchanged: check them with :func:`check_finite`
+    first (``ModelBundle.normalise`` and ``ModelBundle.encode`` refuse them).
+    """
     return np.log1p(np.maximum(np.asarray(pressure_kpa, np.float32), 0.0) / np.float32(scale_kpa)).astype(np.float32)
 
 
 def center_of_pressure_m(pressure_kpa: np.ndarray, pitch_m: float) -> np.ndarray:
-    """(…,H,W) → (…,2) pressure-weighted sensel centre (x, y) in carpet metres; the carpet centre if empty."""
+    """(…,H,W) → (…,2) pressure-weighted sensel centre (x, y) in carpet metres; the carpet centre if empty.
+
+    Negatives read as 0, so a frame of zeros or negatives is empty. The result is always inside
+    [pitch/2, (W − ½)·pitch] × [pitch/2, (H − ½)·pitch] for finite input (NaN/∞: see check_finite).
+    """
     p = np.maximum(np.asarray(pressure_kpa, np.float64), 0.0)
     h, w = p.shape[-2:]
     total = p.sum((-2, -1))

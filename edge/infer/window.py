@@ -21,8 +21,11 @@ class FeatureWindow:
         self.frames = 0
 
     def push(self, features: np.ndarray) -> None:
-        """Append one frame's (F,) features."""
+        """Append one frame's (F,) features; NaN/∞ raise ValueError (they would sit in every window for T frames)."""
         v = np.asarray(features, np.float32).reshape(self.f)
+        if not np.isfinite(v).all():
+            raise ValueError(f"features hold {int((~np.isfinite(v)).sum())} NaN/∞ value(s) of {self.f}; "
+                             "refuse the frame before pushing it (ModelBundle.encode checks its input)")
         if self.frames == 0:
             self._buf[:] = v
             self._end = self.t

@@ -124,7 +124,12 @@ class FilterChain:
 
         The second is None when nothing can be a contact. The first is what forces are
         integrated on: the 3×3 median erodes thin contacts (~4 % of a foot's force at 19 mm).
+        NaN/∞ raise ValueError before any state changes: the history and the EMA would carry
+        them into every later frame (``check_frame`` masks or rejects them first).
         """
+        if not np.isfinite(p).all():
+            raise ValueError(f"FilterChain got {int((~np.isfinite(p)).sum())} NaN/∞ sensel(s): validate frames with "
+                             "check_frame and fill masked sensels first (SceneTracker.update does)")
         if self.temporal:
             self._history = (self._history + [p])[-3:]
             if len(self._history) == 3:

@@ -6,7 +6,10 @@ cutoff rises with speed, so a still signal is smoothed hard and a moving one lag
     x̂ = x̂_prev + alpha · (x − x̂_prev)
 
 Works on scalars or arrays (the speed of a vector is its Euclidean norm). Time comes
-from the caller, so dropped frames and jitter are handled.
+from the caller, so dropped frames and jitter are handled. A sample at or before the last
+time (dt ≤ 0) returns the last estimate unchanged; a NaN/∞ sample or time, or one that
+would make the state non-finite, is skipped the same way and counted in ``skipped``:
+nothing non-finite ever enters the state, so one bad frame cannot poison later ones.
 """
 
 from __future__ import annotations
@@ -31,21 +34,33 @@ class OneEuroFilter:
         self._x: np.ndarray | None = None
         self._dx: np.ndarray | None = None
         self._t_s: float | None = None
+        self.skipped = 0  # samples refused because they (or their time) were not finite
 
     def reset(self) -> None:
         self._x = self._dx = self._t_s = None
 
     def __call__(self, x, t_s: float):
         x = np.asarray(x, dtype=np.float64)
-        if self._x is None or self._t_s is None or t_s <= self._t_s:
-            if self._x is None or self._t_s is None:
-                self._x, self._dx, self._t_s = x.copy(), np.zeros_like(x), t_s
+        t = float(t_s)
+        # NaN compares false and ∞ would freeze the clock: either would poison every later sample.
+        if not (math.isfinite(t) and np.all(np.isfinite(x))):
+            self.skipped += 1
+            last = x if self._x is None else self._x  # nothing to hold yet: the sample is returned as is
+            return last.copy() if last.ndim else float(last)
+        if self._x is None or self._t_s is None:
+            self._x, self._dx, self._t_s = x.copy(), np.zeros_like(x), t
             return self._x.copy() if x.ndim else float(self._x)
-        dt = t_s - self._t_s
-        dx = (x - self._x) / dt
-        self._dx = self._dx + smoothing_alpha(self.d_cutoff_hz, dt) * (dx - self._dx)
-        speed = float(np.linalg.norm(self._dx)) if self._dx.ndim else abs(float(self._dx))
-        a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt)
-        self._x = self._x + a * (x - self._x)
-        self._t_s = t_s
+        if t <= self._t_s:
+            return self._x.copy() if x.ndim else float(self._x)
+        dt = t - self._t_s
+        with np.errstate(over="ignore", invalid="ignore"):
+            dx = (x - self._x) / dt
+            new_dx = self._dx + smoothing_alpha(self.d_cutoff_hz, dt) * (dx - self._dx)
+            speed = float(np.linalg.norm(new_dx)) if new_dx.ndim else abs(float(new_dx))
+            a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt) if math.isfinite(speed) else 1.0
+            new_x = self._x + a * (x - self._x)
+        if not (np.all(np.isfinite(new_x)) and np.all(np.isfinite(new_dx))):  # e.g. a huge jump over a tiny dt
+            self.skipped += 1
+            return self._x.copy() if x.ndim else float(self._x)
+        self._x, self._dx, self._t_s = new_x, new_dx, t
         return self._x.copy() if x.ndim else float(self._x)
