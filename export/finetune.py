@@ -53,8 +53,12 @@ def user_tracks(data: str | Path, split: str = "all", subjects: list[str] | None
 
 def finetune(bundle: str | Path, data: str | Path, fraction: float, out: str | Path, *, steps: int = 300, lr: float = 3e-5,
              stage: str = "windows", batch: int = 16, chunks: int = 4, split: str = "all", subjects: list[str] | None = None,
-             seed: int = 0, threads: int = 1, progress: bool = True, precision: str = "int8") -> dict[str, Any]:
-    """Fine-tune ``bundle`` on the first ``fraction`` of the user's tracks; write the bundle ``out``; report."""
+             seed: int = 0, threads: int = 1, progress: bool = True, precision: str = "int8",
+             held_out_from: float | None = None) -> dict[str, Any]:
+    """Fine-tune ``bundle`` on the first ``fraction`` of the user's tracks; write the bundle ``out``; report.
+
+    ``held_out_from``: hold out the frames from this fraction of every track on (default: ``fraction``), so
+    a sweep over fractions is judged on one held-out set (frames between the two are unused)."""
     import tempfile
 
     from export.bundle import update_manifest, bundle_from_net, load_net
@@ -62,7 +66,11 @@ def finetune(bundle: str | Path, data: str | Path, fraction: float, out: str | P
 
     net, manifest = load_net(bundle)
     tracks, pitch, ds = user_tracks(data, split, subjects)
-    train, held_out = split_in_time(tracks, fraction)
+    start = fraction if held_out_from is None else held_out_from
+    if start < fraction:
+        raise ValueError(f"held_out_from {start} is before the end of the training fraction {fraction}")
+    train = split_in_time(tracks, fraction)[0]
+    held_out = split_in_time(tracks, start)[1]
     if not held_out:
         raise ValueError(f"fraction {fraction} leaves no held-out frames to check the fine-tuned model on")
     if fraction > 0 and not train:
@@ -80,7 +88,7 @@ def finetune(bundle: str | Path, data: str | Path, fraction: float, out: str | P
     name = f"{manifest['name']}-ft{int(round(100 * fraction))}"
     training = {"finetuned_from": source, "data": str(data), "split": split, "subjects": subjects or "all",
                 "fraction": fraction, "steps": steps if fraction > 0 else 0, "lr": lr, "stage": stage, "seed": seed,
-                "frames_trained": int(sum(len(t) for t in train)), "frames_held_out": int(sum(len(t) for t in held_out))}
+                "held_out_from": start, "frames_trained": int(sum(len(t) for t in train)), "frames_held_out": int(sum(len(t) for t in held_out))}
     report = bundle_from_net(net, out, name, pitch_m=pitch, rate_hz=float(ds.manifest.get("rate_hz", 14.0)),
                              calib_tracks=(train or held_out)[:8], gate_tracks=held_out, gate_split="held-out (time split)",
                              training=training, precision=precision, seed=seed)

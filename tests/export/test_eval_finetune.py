@@ -98,3 +98,14 @@ def test_finetune_splits_in_time_and_writes_a_new_bundle(bundle, tiny_data, tmp_
     assert any(not np.array_equal(before[k], after[k]) for k in before.files)  # it trained
     assert main(["finetune", "--bundle", str(bundle), "--data", str(tiny_data), "--fraction", "1.2", "--out", str(tmp_path / "no")]) == 2
     assert not (tmp_path / "no").exists()
+
+
+def test_finetune_sweep_judges_every_fraction_on_the_same_frames(bundle, tiny_data, tmp_path):
+    from export.sweep import main as sweep_main
+
+    assert sweep_main(["--bundle", str(bundle), "--data", str(tiny_data), "--subject", "s02", "--fractions", "0,0.4",
+                       "--steps", "2", "--out", str(tmp_path / "ft")]) == 0
+    result = json.loads((tmp_path / "ft.json").read_text())
+    assert set(result["mpjpe_cm"]["s02"]) == {"0%", "40%"} and result["setup"]["held_out"] == "the last 60% of every track"
+    assert all(np.isfinite(v) for v in result["mean_mpjpe_cm"].values())
+    assert "| s02 |" in (tmp_path / "ft.md").read_text()
