@@ -28,6 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--batch", type=int, default=32, help="windows per chunk (windows); frames or windows per step (frames, head)")
     t.add_argument("--chunks", type=int, default=1, help="chunks per step (default 1)")
     t.add_argument("--lr", type=float, default=1e-4, help="Adam learning rate (default 1e-4)")
+    t.add_argument("--lr-schedule", default="constant", choices=("constant", "cosine"),
+                   help="constant, or cosine decay to lr/100 at --steps (default constant)")
     t.add_argument("--weight-decay", type=float, default=1e-3, help="Adam weight decay (default 1e-3)")
     t.add_argument("--optimizer", default="adam", choices=("adam", "adamw"),
                    help="adam (the paper's, weight decay as L2 in the gradient) or adamw (decoupled decay)")
@@ -105,7 +107,7 @@ def run_train(args: argparse.Namespace) -> int:
         model_cfg = ModelConfig.preset(args.preset, **_parse_sets(args.set))
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
-    cfg = TrainConfig(data=args.data, out=args.out, stage=args.stage, init=args.init, exclude_activities=args.exclude_activity, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr,
+    cfg = TrainConfig(data=args.data, out=args.out, stage=args.stage, init=args.init, exclude_activities=args.exclude_activity, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr, lr_schedule=args.lr_schedule,
                       weight_decay=args.weight_decay, optimizer=args.optimizer, seed=args.seed, checkpoint_every=args.checkpoint_every,
                       val_every=args.val_every, device=args.device, threads=args.threads)
     from sim.dataset import DatasetError

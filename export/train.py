@@ -17,6 +17,7 @@ every RNG state; written every ``checkpoint_every`` steps, at the end and on SIG
 from __future__ import annotations
 
 import json
+import math
 import os
 import random
 import signal
@@ -48,6 +49,7 @@ class TrainConfig:
     batch: int = 32                 # B windows per chunk
     chunks: int = 1                 # chunks (of different tracks) per step
     lr: float = 1e-4
+    lr_schedule: str = "constant"   # "constant" or "cosine" (to lr/100 at `steps`; a function of the step, so resume-safe)
     weight_decay: float = 1e-3
     optimizer: str = "adam"         # "adam" (the paper's: L2 added to the gradient) or "adamw" (decoupled decay)
     seed: int = 0
@@ -87,6 +89,8 @@ class Trainer:
 
         if cfg.stage not in STAGES:
             raise ValueError(f"stage must be one of {STAGES}, got {cfg.stage!r}")
+        if cfg.lr_schedule not in ("constant", "cosine"):
+            raise ValueError(f"lr_schedule must be 'constant' or 'cosine', got {cfg.lr_schedule!r}")
         self.cfg = cfg
         self.out = Path(cfg.out)
         self.out.mkdir(parents=True, exist_ok=True)
@@ -139,6 +143,12 @@ class Trainer:
         self.best_val: float | None = None
         self._stop = False
         (self.out / "config.json").write_text(json.dumps(asdict(cfg), indent=1))
+
+    def lr_at(self, step: int) -> float:
+        if self.cfg.lr_schedule == "constant":
+            return self.cfg.lr
+        t = min(step / max(self.cfg.steps, 1), 1.0)
+        return self.cfg.lr * (0.01 + 0.99 * 0.5 * (1 + math.cos(math.pi * t)))
 
     def trainable(self) -> list[torch.nn.Parameter]:
         """What this stage optimises: the frame head and encoder (frames), the head (head), all (windows)."""
@@ -225,6 +235,8 @@ class Trainer:
             for k, v in {"loss": float(loss.detach()), **parts}.items():
                 totals[k] = totals.get(k, 0.0) + v / repeats
         torch.nn.utils.clip_grad_norm_(self.trainable(), 5.0)
+        for group in self.opt.param_groups:
+            group["lr"] = self.lr_at(self.step)
         self.opt.step()
         if self.disc is not None:
             self.opt_d.zero_grad(set_to_none=True)

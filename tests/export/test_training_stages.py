@@ -104,3 +104,11 @@ def test_leave_one_activity_out_never_trains_on_it(tiny_data, tmp_path):
     assert sum(map(len, tr.tracks)) < sum(map(len, full.tracks))
     with pytest.raises(ValueError, match="unknown activities"):
         _trainer(str(tiny_data), tmp_path / "x", "frames", 1, exclude_activities=["juggling"])
+
+
+def test_cosine_schedule_decays_to_a_hundredth(tiny_data, tmp_path):
+    tr = _trainer(str(tiny_data), tmp_path, "frames", 10, lr_schedule="cosine")
+    assert tr.lr_at(0) == pytest.approx(3e-3) and tr.lr_at(5) == pytest.approx(3e-3 * 0.505)
+    assert tr.lr_at(10) == pytest.approx(3e-5)
+    tr.run()
+    assert tr.opt.param_groups[0]["lr"] == pytest.approx(tr.lr_at(9))  # the last step ran at the schedule's value
