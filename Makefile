@@ -30,8 +30,14 @@ $(VENV)/.test: $(VENV)/.runtime
 test-deps: $(VENV)/.test
 	test -x /usr/sbin/mosquitto || command -v mosquitto >/dev/null || (apt-get update && apt-get install -y mosquitto)
 
-run: venv
-	$(VENV)/bin/cavatar stream --source 'sim://?people=2&seed=7' --seconds 10
+# The demo: two people on the virtual carpet → `cavatar run` (20 s, a summary line each second) →
+# out/run/bodies.jsonl, then out/run/bodies.png (truth beside reconstruction; drawing needs the viz extra).
+$(VENV)/.viz: $(VENV)/.runtime
+	$(PIP) install -e '.[viz]'
+	touch $@
+
+run: venv $(VENV)/.viz
+	$(PY) -m edge.runtime.demo --out out/run --seconds 20 --people 2 --seed 7
 
 test: test-deps
 	$(PY) -m pytest -q

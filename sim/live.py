@@ -17,6 +17,13 @@ import numpy as np
 from sim.dataset.generate import LYING, PAPER_ACTIVITIES
 
 
+def live_sensor(seed: int, grid: int = 96, adc_bits: int = 12, pitch_mm: float = 19.05):
+    """The sensor of ``sim://?seed=…&grid=…&bits=…&pitch_mm=…`` (the runtime calibrates this same carpet)."""
+    from sim.sensor import CarpetSensor
+
+    return CarpetSensor.random(seed, grid=grid, adc_bits=adc_bits, pitch_mm=pitch_mm)
+
+
 class LiveCarpet:
     def __init__(self, rows: int = 96, cols: int = 96, people: int = 1, seed: int = 0, pitch_mm: float = 19.05,
                  rate_hz: float = 14.0, adc_bits: int = 12, chunk_s: float = 10.0, body: str = "lite",
@@ -24,7 +31,6 @@ class LiveCarpet:
         from edge.body import BodyModel
         from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
         from sim.motion import Subject
-        from sim.sensor import CarpetSensor
 
         if rows != cols or rows not in (96, 48, 32):
             raise ValueError(f"the simulated carpet is 96×96, 48×48 or 32×32; got {rows}×{cols}")
@@ -39,7 +45,7 @@ class LiveCarpet:
         self.tissue = tissue_stiffness(self.body)
         self.subjects = [Subject.random(i, seed * 1000 + i) for i in range(people)]
         self.mass_kg = [subject_mass_kg(self.body, s.betas) for s in self.subjects]
-        self.sensor = CarpetSensor.random(seed, grid=rows, adc_bits=adc_bits, pitch_mm=pitch_mm)
+        self.sensor = live_sensor(seed, rows, adc_bits, pitch_mm)
         self.sign = int(self.sensor.config.frontend.sign)
         self.adc_bits = int(self.sensor.config.frontend.adc_bits)
         self._scene = None

@@ -26,6 +26,9 @@ SUBCOMMANDS: list[str] = [
     "sim.cli",
     "export.cli",
     "calibration.cli",
+    "edge.cli.run",
+    "edge.cli.config_cmd",
+    "edge.cli.status",
 ]
 
 EPILOG = """\

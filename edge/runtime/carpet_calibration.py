@@ -1,0 +1,129 @@
+"""Which calibration the runtime applies: the configured file, or — on the virtual carpet only — a fresh one.
+
+- ``[calibration] file`` given: it is loaded (its SHA-256 checked) and must belong to the
+  board that answered the handshake (device id, grid, ADC bits, sign, firmware); otherwise
+  :class:`SetupError`.
+- no file, ``sim://`` source (world=bodies): the scripted calibration session is run on the
+  virtual carpet of the same seed, grid, ADC bits and pitch, as an installer would run
+  `cavatar calibrate --sim`, and saved as ``calibration-sim-<seed>-<grid>.npz`` beside the
+  status file (the output folder). A later run with the same output folder finds it and
+  uses it again (if it still matches the board).
+- no file, a real carpet (serial://, usb://, replay://): refused, saying how to calibrate.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from calibration.file import Calibration, CalibrationError
+
+
+class SetupError(Exception):
+    """The runtime cannot start; the message says what is wrong and how to fix it (exit 2)."""
+
+
+@dataclass
+class ChosenCalibration:
+    calibration: Calibration
+    path: Path
+    automatic: bool
+
+
+def sim_calibration_path(out_dir: Path, seed: int, grid: int) -> Path:
+    return Path(out_dir) / f"calibration-sim-{seed}-{grid}.npz"
+
+
+def choose_calibration(file: str, source_url: str, out_dir: Path, say: Callable[[str], None] = print) -> ChosenCalibration:
+    """The calibration to apply (see the module doc), BEFORE the source starts (the virtual carpet's session
+    would otherwise run while the board streams); SetupError when there is none. Check it against the board
+    with :func:`check_board` once the handshake is done."""
+    if file:
+        path = Path(file)
+        try:
+            return ChosenCalibration(Calibration.load(path), path, False)
+        except CalibrationError as exc:
+            raise SetupError(f"calibration {path}: {exc}") from None
+    scheme = source_url.partition("://")[0]
+    if scheme != "sim":
+        raise SetupError(_how_to_calibrate(scheme, source_url))
+    return _sim_calibration(source_url, Path(out_dir), say)
+
+
+def check_board(chosen: ChosenCalibration, board_info: Any) -> None:
+    """SetupError unless the calibration belongs to the board that answered the handshake."""
+    try:
+        chosen.calibration.check_device(board_info)
+    except CalibrationError as exc:
+        if chosen.automatic:  # the virtual board and its own sensor model disagree: a bug, said plainly
+            raise SetupError(f"the automatic calibration {chosen.path} does not fit its own virtual board: {exc}") from None
+        raise SetupError(f"calibration {chosen.path}: {exc}") from None
+
+
+def _how_to_calibrate(scheme: str, url: str) -> str:
+    if scheme == "replay":
+        how = ("calibrate from recordings of the same carpet: `cavatar calibrate --empty empty.bin --walk walk.bin "
+               "--board board.bin --stance stance.bin --holdout holdout.bin --mass KG --out calibration.npz` "
+               "(record each step with `cavatar record`)")
+    else:
+        how = (f"run the guided calibration on this carpet once: `cavatar calibrate --source '{url}' --mass KG "
+               "--out /var/lib/cavatar/calibration.npz` (KG: the mass of the person doing the poses)")
+    return (f"no calibration for {url}: a real carpet's readings mean nothing until it is calibrated. To fix it, {how}; "
+            "then start again with `cavatar run --calibration /var/lib/cavatar/calibration.npz` (or set "
+            "[calibration] file in the configuration).")
+
+
+def _sim_calibration(url: str, out_dir: Path, say: Callable[[str], None]) -> ChosenCalibration:
+    from edge.sources import sim as sim_scheme
+    from edge.urls import parse_url
+
+    _, opts = parse_url(url, sim_scheme.SCHEME, sim_scheme.FORM, sim_scheme.OPTIONS)
+    if opts["world"] != "bodies":
+        raise SetupError(f"{url}: automatic calibration runs on the simulated bodies world only (world=bodies); "
+                         "the footsteps world has no sensor model to calibrate. Use world=bodies or pass --calibration FILE.")
+    path = sim_calibration_path(out_dir, opts["seed"], opts["grid"])
+    expected = {"device_id": f"sim-{opts['seed']}", "rows": opts["grid"], "cols": opts["grid"], "adc_bits": opts["bits"]}
+    if path.exists():
+        try:
+            cal = Calibration.load(path)
+            if all(cal.device.get(k) == v for k, v in expected.items()) and abs(cal.pitch_m * 1e3 - opts["pitch_mm"]) < 1e-6:
+                say(f"calibration: the virtual carpet's calibration from an earlier run, {path}")
+                return ChosenCalibration(cal, path, True)
+            say(f"calibration: {path} is for another virtual carpet; calibrating again")
+        except CalibrationError as exc:
+            say(f"calibration: {path} cannot be used ({exc}); calibrating again")
+    t0 = time.monotonic()
+    cal = run_sim_session(opts["seed"], opts["grid"], opts["bits"], opts["pitch_mm"], path)
+    say(f"calibration: no calibration file, so the virtual carpet sim-{opts['seed']} was calibrated as an installer "
+        f"would (scripted `cavatar calibrate --sim` session, {time.monotonic() - t0:.0f} s) → {path}")
+    return ChosenCalibration(cal, path, True)
+
+
+def run_sim_session(seed: int, grid: int, adc_bits: int, pitch_mm: float, out_path: Path,
+                    mass_kg: float = 72.0) -> Calibration:
+    """The scripted calibration session on the virtual carpet of ``sim://?seed=&grid=&bits=&pitch_mm=``; saves ``out_path``."""
+    from calibration.actor import Actor
+    from calibration.providers import SimProvider
+    from calibration.session import Options, Session, SessionError
+    from sim.live import live_sensor
+
+    sensor = live_sensor(seed, grid, adc_bits, pitch_mm)
+    provider = SimProvider(Actor(sensor, mass_kg=mass_kg, seed=seed), None, out=lambda text: None, live_map=False)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="cavatar-simcal-") as work:
+        session = Session(Path(work), Options(mass_kg=mass_kg))
+        try:
+            session.run(provider)
+            cal, val = session.finish(None)
+        except (SessionError, CalibrationError, ValueError) as exc:
+            raise SetupError(f"the automatic calibration of the virtual carpet failed: {exc}") from None
+    if not val.ok:
+        raise SetupError(f"the automatic calibration of the virtual carpet did not validate: {val.summary()}")
+    cal.save(out_path)
+    return cal
+
+
+__all__ = ["ChosenCalibration", "SetupError", "check_board", "choose_calibration", "run_sim_session", "sim_calibration_path"]
