@@ -43,7 +43,8 @@ class TrainConfig:
     out: str = "runs/lean"
     stage: str = "windows"          # "frames", "head" or "windows" (export/stages.py)
     init: str = ""                  # checkpoint whose model (and frame head) weights start this run
-    cache_copies: int = 2           # stage "head": corruption copies of every frame in the feature cache
+    cache_copies: int = 2           # stage "head": corruption copies of every frame in the feature cache (copy c turned c·90°)
+    turns: bool = True              # turn the carpet by random quarter turns (frames, head stages; export/stages.py)
     exclude_activities: list[str] = field(default_factory=list)  # leave-one-activity-out: these never train
     steps: int = 5000
     batch: int = 32                 # B windows per chunk
@@ -177,12 +178,13 @@ class Trainer:
             chunk = self.sample_chunk()
             return self.net.forward_chunk(chunk["x"]), chunk
         if self.cfg.stage == "frames":
-            batch = sample_frames(self.tracks, self.weights, self.cfg.batch, self.pitch_m, self.rng, self.device)
+            batch = sample_frames(self.tracks, self.weights, self.cfg.batch, self.pitch_m, self.rng, self.device, self.cfg.turns)
             return dict(zip(OUTPUTS, self.frame_head(self.net.encoder(batch["x"])))), batch
         if self.cache is None:
             t0 = time.monotonic()
             self.cache = FeatureCache(self.net.encoder, self.tracks, self.pitch_m, self.cfg.cache_copies, self.cfg.seed,
-                                      device=self.device, progress=self._cache_progress if self.cfg.progress else None)
+                                      device=self.device, progress=self._cache_progress if self.cfg.progress else None,
+                                      turns=self.cfg.turns)
             if self.cfg.progress:
                 print(f"\nfeature cache: {self.cfg.cache_copies} × {sum(len(t) for t in self.tracks)} frames in "
                       f"{time.monotonic() - t0:.0f} s", file=sys.stderr)

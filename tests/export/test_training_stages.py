@@ -22,7 +22,7 @@ def _trainer(data, out, stage, steps, init="", **kw):
 @pytest.fixture(scope="module")
 def frames_run(tiny_data, tmp_path_factory):
     out = tmp_path_factory.mktemp("frames")
-    tr = _trainer(str(tiny_data), out, "frames", 40)
+    tr = _trainer(str(tiny_data), out, "frames", 40, turns=False)  # learning, without the harder turned copies
     tr.run()
     return out
 
@@ -112,3 +112,31 @@ def test_cosine_schedule_decays_to_a_hundredth(tiny_data, tmp_path):
     assert tr.lr_at(10) == pytest.approx(3e-5)
     tr.run()
     assert tr.opt.param_groups[0]["lr"] == pytest.approx(tr.lr_at(9))  # the last step ran at the schedule's value
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_a_quarter_turn_turns_pressure_and_labels_alike(tiny_data, k):
+    from edge.body import BodyModel
+    from edge.infer.normalise import center_of_pressure_m
+    from export.data import load_tracks
+    from export.stages import turn_frames, turn_labels
+
+    pitch = 19.05e-3 * 3
+    tr = load_tracks(tiny_data, "train")[0]
+    f = np.arange(0, len(tr), 7)
+    p = tr.pressure_kpa[f].astype(np.float32)
+    side = p.shape[-1] * pitch
+    pose, transl, joints = turn_labels(tr.pose_aa[f], tr.transl_m[f], tr.joints_m[f], k, side)
+    q = np.linalg.matrix_power(np.array([[0.0, -1.0], [1.0, 0.0]]), k)
+    centre = np.array([side / 2, side / 2])
+    loaded = p.sum((1, 2)) > 0
+    cop, cop_turned = center_of_pressure_m(p, pitch), center_of_pressure_m(turn_frames(p, k), pitch)
+    np.testing.assert_allclose(cop_turned[loaded], ((cop - centre) @ q.T + centre)[loaded], atol=1e-9)
+    # the turned labels through the body model give the turned joints: pressure and body moved together
+    body = BodyModel.load("lite")
+    j = body.forward(pose, tr.betas[f], transl)["joints"]
+    j0 = body.forward(tr.pose_aa[f], tr.betas[f], tr.transl_m[f])["joints"]
+    np.testing.assert_allclose(j - j[:, :1], joints - joints[:, :1], atol=2e-5)
+    np.testing.assert_allclose(j[:, :, :2] - centre, (j0[:, :, :2] - centre) @ q.T, atol=2e-5)
+    np.testing.assert_allclose(j[:, :, 2], j0[:, :, 2], atol=2e-5)
+    assert np.array_equal(turn_frames(turn_frames(p, k), 4 - k), p)
