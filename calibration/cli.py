@@ -95,7 +95,8 @@ def run(args: argparse.Namespace) -> int:
     results = session.all_results()
     out = Path(args.out)
     png, txt = out.with_suffix(".png"), out.with_suffix(".txt")
-    write_report(cal, results, val, png, txt)
+    if not write_report(cal, results, val, png, txt):
+        png = "(no PNG: matplotlib is not installed; pip install 'cavatar-edge[viz]' to draw it)"
     w = results.get("walk")
     if w is not None and not args.no_map:
         print(render_map(w.arrays["coverage"] > 0, title="coverage map (x = masked)", faults=~cal.usable))

@@ -35,8 +35,15 @@ def text_summary(cal: Calibration, results: dict[str, StepResult], validation: S
 
 
 def write_report(cal: Calibration, results: dict[str, StepResult], validation: StepResult, png: str | Path,
-                 txt: str | Path | None = None) -> None:
-    import matplotlib
+                 txt: str | Path | None = None) -> bool:
+    """Write the text summary (``txt``) and the PNG; False when matplotlib (the viz extra) is missing,
+    so a board without it still calibrates and keeps the text report."""
+    if txt is not None:
+        Path(txt).write_text(text_summary(cal, results, validation))
+    try:
+        import matplotlib
+    except ImportError:
+        return False
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -90,5 +97,4 @@ def write_report(cal: Calibration, results: dict[str, StepResult], validation: S
     fig.tight_layout()
     fig.savefig(png, dpi=90)
     plt.close(fig)
-    if txt is not None:
-        Path(txt).write_text(text_summary(cal, results, validation))
+    return True

@@ -93,6 +93,17 @@ def test_cli_sim_mode_and_bad_arguments(tmp_path, capsys):
     assert "give a source" in capsys.readouterr().err
 
 
+def test_cli_without_matplotlib_still_writes_the_calibration_and_text_report(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # a board installed without the viz extra
+    out = tmp_path / "cal.npz"
+    rc = main(["calibrate", "--sim", "--grid", "32", "--seed", "4", "--no-map", "--work", str(tmp_path / "w"), "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc in (0, 1) and out.exists() and (tmp_path / "cal.txt").exists(), text
+    assert not (tmp_path / "cal.png").exists() and "no PNG: matplotlib is not installed" in text
+
+
 def test_auto_range_picks_the_highest_gain_with_at_most_1_percent_at_the_rail():
     from edge.peripherals import open_chip
     from edge.peripherals.fakebus import FakeBus, FakeMCP4018
