@@ -29,6 +29,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.run",
     "edge.cli.config_cmd",
     "edge.cli.status",
+    "edge.cli.doctor",
 ]
 
 EPILOG = """\
