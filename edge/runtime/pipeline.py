@@ -308,6 +308,15 @@ class Runtime:
                 continue
         return {}
 
+    def queue_depths(self) -> dict[str, tuple[int, int] | None]:
+        """Read-only, any thread: (depth now, bound) of the reader → pipeline frame queue ("frames") and of the
+        pipeline → publisher record queue ("records"); None where there is none (not set up, or an injected
+        source without a ``queue_depth()``)."""
+        depth = getattr(self.source, "queue_depth", None)
+        pub = self.publisher
+        return {"frames": depth() if depth is not None else None,
+                "records": (pub.queued(), pub.bound) if pub is not None else None}
+
     def snapshot(self) -> dict[str, Any]:
         """The status (schema cavatar.status/1): every counter, stage times, sinks (see edge.runtime.status)."""
         from edge.sinks import redact

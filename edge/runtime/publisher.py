@@ -80,6 +80,11 @@ class Publisher:
         with self._cond:
             return len(self._records)
 
+    @property
+    def bound(self) -> int:
+        """Most records the queue holds (``queue_records``); beyond it the oldest is dropped."""
+        return self._max
+
     def close(self, timeout_s: float = 10.0) -> None:
         """Publish everything queued, close every sink; bounded by ``timeout_s``."""
         with self._cond:

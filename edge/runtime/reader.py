@@ -61,6 +61,10 @@ class TimedCarpetSource(CarpetSource):
         """True once the reader thread has finished (end of a recording, or a fatal error) and every frame was taken."""
         return self._thread is not None and not self._thread.is_alive() and self._queue.empty()
 
+    def queue_depth(self) -> tuple[int, int]:
+        """(frames waiting for the pipeline now, the queue's bound ``queue_frames``); read-only."""
+        return self._queue.qsize(), self._queue.maxsize
+
     def _frames_done(self, n: int) -> None:
         ms = self._decode_s * 1e3 / n
         for _ in range(n):

@@ -4,6 +4,9 @@ A :class:`~firmware_protocol.virtual_board.VirtualBoard` scans frames from the
 simulator and speaks the wire protocol; this link hands its bytes to the same decoder
 and frame assembly as a real board, so the demo exercises the whole path.
 ``speed=0`` runs as fast as frames can be made (a virtual clock), ``speed=1`` in real time.
+In real time the next scene (every ``scene_s`` seconds the people start other activities
+elsewhere) is placed ahead in a helper process (``sim.live.LiveCarpet(prefetch=True)``), so
+the stream does not stop while it is placed; closing the link ends the helper.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from edge.sources.base import Link, LinkLost, Option, parse_bool, parse_url
 from firmware_protocol import codec
 
 SCHEME = "sim"
-FORM = "sim://?people=2&seed=7&grid=96&rate=14&speed=1&world=bodies"
+FORM = "sim://?people=2&seed=7&grid=96&rate=14&speed=1&world=bodies&scene_s=10"
 
 
 def _grid(text: str) -> int:
@@ -45,6 +48,13 @@ def _bits(text: str) -> int:
     return value
 
 
+def _positive_s(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise ValueError("scene_s must be > 0 seconds")
+    return value
+
+
 OPTIONS = {
     "world": Option(_world, "bodies", "bodies = simulated people doing the paper's activities; footsteps = walking feet only"),
     "people": Option(_people, 1, "people on the carpet, 0..3"),
@@ -55,6 +65,7 @@ OPTIONS = {
     "bits": Option(_bits, 12, "ADC bits per sample: 8, 10, 12 or 16 (footsteps world; bodies draws its own)"),
     "speed": Option(float, 1.0, "1 = real time, 0 = as fast as possible"),
     "faults": Option(parse_bool, False, "inject line noise now and then (bit flips, garbage, torn frames)"),
+    "scene_s": Option(_positive_s, 10.0, "seconds of each simulated scene (bodies world): then new activities and places"),
 }
 
 
@@ -88,7 +99,8 @@ class SimLink(Link):
         else:
             from sim.live import LiveCarpet
 
-            carpet = LiveCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"])
+            carpet = LiveCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"],
+                                chunk_s=o["scene_s"], prefetch=o["speed"] > 0)
             bits, sign = carpet.adc_bits, carpet.sign
         self.carpet = carpet
         tiles = 3 if o["grid"] % 3 == 0 else 1
@@ -136,6 +148,9 @@ class SimLink(Link):
 
     def close(self) -> None:
         self.board = None
+        carpet, self.carpet = getattr(self, "carpet", None), None
+        if carpet is not None and hasattr(carpet, "close"):
+            carpet.close()  # the live carpet's scene helper process
 
 
 def open_link(url: str, **_: object) -> SimLink:
