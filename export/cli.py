@@ -83,6 +83,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--threads", type=int, default=1)
     f.set_defaults(func=run_finetune)
 
+    from export.benchmark import add_arguments as bench_arguments  # numpy only at import: torch comes with the run
+
+    k = sub.add_parser("bench", help="speed against error of every model variant, and the measured ratios (needs the export extra)",
+                       description="Per-frame latency (median, p99), frames/s, peak memory and size of every model variant "
+                       "(the shipped bundle, its fp32 twin, --bundle folders, the untrained paper architecture) at 1 and 2 "
+                       "onnxruntime threads, beside MPJPE/PVE/translation on unseen subjects (--data; none: speed only); "
+                       "ratios measured side by side (onnxruntime vs PyTorch, feature cache, joints vs mesh, scene-adaptive "
+                       "vs always-infer, runtime vs the frame interval). Writes the JSON, a Markdown table and the "
+                       "latency-vs-MPJPE plot with its Pareto front. See bench/README.md.")
+    bench_arguments(k)
+    k.set_defaults(func=run_bench)
+
 
 def _parse_sets(items: list[str]) -> dict:
     out = {}
@@ -207,4 +219,20 @@ def run_finetune(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     m = report["metrics"]
     print(f"held-out MPJPE {m['mpjpe_cm']:.2f} cm over {m['frames']} frames (fp32 {m['mpjpe_fp32_cm']:.2f}); wrote {args.out}")
+    return 0
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    try:
+        import torch  # noqa: F401
+
+        from export.benchmark import BenchmarkError, run_from_args, summary
+    except ImportError as exc:
+        raise CliError(f"benchmarking needs the export extra (pip install '.[export]'): {exc}") from None
+    try:
+        result = run_from_args(args, prog="cavatar bench")
+    except BenchmarkError as exc:
+        raise CliError(str(exc)) from None
+    print(summary(result))
+    print(f"wrote {args.json}, {args.markdown}, {args.plot}")
     return 0

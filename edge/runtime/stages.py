@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from edge.frames import RawFrame
+from edge.infer import FeatureWindow
 from edge.record import heartbeat, make_person, make_record
 from edge.runtime.counters import Counters, StageTimes
 from edge.runtime.model_input import batch_inputs
@@ -52,8 +53,14 @@ class FrameStages:
     """The synchronous per-frame pipeline (no threads); :class:`edge.runtime.Runtime` drives it."""
 
     def __init__(self, calibrated: Any, scene: Any, bundle: Any, *, device: str, times: StageTimes, counters: Counters,
-                 invalid: Counters | None = None, heartbeat_s: float = 1.0, seq_start: int = 0) -> None:
+                 invalid: Counters | None = None, heartbeat_s: float = 1.0, seq_start: int = 0,
+                 adaptive: bool = True) -> None:
         self.calibrated, self.scene, self.bundle = calibrated, scene, bundle
+        # adaptive=False is the always-infer baseline of bench/speed_error.py: no still reuse, and the model
+        # also runs on frames with nobody (the whole carpet as one input, into a window of its own; nothing
+        # published from it). Records and heartbeats are decided as in adaptive mode.
+        self.adaptive = bool(adaptive)
+        self._idle_window = None if self.adaptive else FeatureWindow(bundle.window, bundle.features)
         self.device = device
         self.model = bundle.version
         self.activities = bundle.activities
@@ -90,6 +97,8 @@ class FrameStages:
         if not sf.people:
             c.add("frames_empty" if sf.empty else "frames_unconfirmed")
             self.people_now = 0
+            if not self.adaptive:
+                self._infer_idle(cal)
             out = FrameOutcome("empty" if sf.empty else "unconfirmed", frame, self._maybe_heartbeat(frame))
             times.add("frame", (time.perf_counter() - t0) * 1e3)
             return out
@@ -109,7 +118,7 @@ class FrameStages:
             if new:
                 c.add("tracks_started")
             states.append(st)
-            if person.still and st.result is not None:
+            if self.adaptive and person.still and st.result is not None:
                 st.window.push(st.result.features)  # unchanged input: the same features, no encoder
                 c.add("still_reuses")
             else:
@@ -147,6 +156,22 @@ class FrameStages:
         return record, tuple(p["activity"] for p in people)
 
     # ------------------------------------------------------------------ helpers
+    def _infer_idle(self, cal: Any) -> None:
+        """adaptive=False on a frame with no confirmed person: encoder + head on the whole carpet."""
+        masked = cal.masked if cal.masked.any() else None
+        pressure = self.scene.filters.fill(cal.pressure_kpa, masked)
+        x, origins = batch_inputs(self.bundle, pressure, [np.ones(pressure.shape, bool)])
+        t0 = time.perf_counter()
+        feats = self.bundle.encode(x)
+        t1 = time.perf_counter()
+        self.times.add("encoder", (t1 - t0) * 1e3)
+        self._idle_window.push(feats[0])
+        self.bundle.head(self._idle_window.window(), origins)
+        self.times.add("head", (time.perf_counter() - t1) * 1e3)
+        self.counters.add("encoder_runs")
+        self.counters.add("head_runs")
+        self.counters.add("idle_runs")
+
     def _maybe_heartbeat(self, frame: RawFrame) -> dict | None:
         last = self._last_heartbeat_t
         due = self._was_people or last is None or frame.t_s < last or frame.t_s - last >= self.heartbeat_s
