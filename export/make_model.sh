@@ -15,8 +15,8 @@ PY=${PY:-.venv/bin/python}
 WORK=${WORK:-$HOME/.cache/cavatar-model}
 BUNDLE=${BUNDLE:-edge/models/lean-96}
 EVAL=${EVAL:-docs/model}
-STEPS_FRAMES=${STEPS_FRAMES:-4000}
-STEPS_HEAD=${STEPS_HEAD:-3000}
+STEPS_FRAMES=${STEPS_FRAMES:-3500}
+STEPS_HEAD=${STEPS_HEAD:-2000}
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 D=$WORK/data R=$WORK/runs
 mkdir -p "$D" "$R" "$EVAL"
@@ -35,8 +35,8 @@ gen multi_eval --subjects 6 --seconds-per-activity 10 --people 1..3 --seed 101
 DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
 "$CAVATAR" train --stage frames "${DATA[@]}" --out "$R/frames" --steps "$STEPS_FRAMES" --batch 128 --lr 1e-3 \
   --lr-schedule cosine --optimizer adamw --threads 1 --val-every 500 --checkpoint-every 100 --resume
-"$CAVATAR" train --stage head "${DATA[@]}" --init "$R/frames/best.pt" --out "$R/head" --steps "$STEPS_HEAD" --batch 64 \
-  --lr 1e-3 --lr-schedule cosine --optimizer adamw --threads 1 --val-every 500 --checkpoint-every 100 --resume
+"$CAVATAR" train --stage head "${DATA[@]}" --init "$R/frames/best.pt" --out "$R/head" --steps "$STEPS_HEAD" --batch 64 --cache-copies 4 \
+  --lr 1e-3 --lr-schedule cosine --optimizer adamw --threads 2 --val-every 500 --checkpoint-every 100 --resume
 
 "$CAVATAR" bundle "$R/head/best.pt" --data "$D/many48" --out "$BUNDLE" --name lean-96
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --data "$D/train100k" --split test --out "$EVAL/eval-test" \
