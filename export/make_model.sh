@@ -44,5 +44,5 @@ DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 2..3 --out "$EVAL/eval-multi" \
   --title "lean-96 int8 on unseen subjects, two and three people"
 "$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many48" --split test --subject s12 --subject s17 \
-  --fractions 0,0.1,0.2,0.3,0.4,0.5,0.6 --steps 300 --stage head --out "$EVAL/finetune"
+  --fractions 0,0.1,0.3,0.6 --steps 300 --lr 3e-4 --stage head --out "$EVAL/finetune"
 echo "bundle: $BUNDLE; tables: $EVAL/eval-test.md, $EVAL/eval-multi.md, $EVAL/finetune.md"
