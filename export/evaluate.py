@@ -43,21 +43,29 @@ def predict(inputs: np.ndarray, encode: Encode, head: Head, window: int, batch: 
     return {k: np.concatenate(v) for k, v in outs.items()}
 
 
+def predict_track(tr: Track, encode: Encode, head: Head, window: int, pitch_m: float, seed: int,
+                  frame_stride: int = 1) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """(frames, outputs) for every ``frame_stride``-th frame of one track; outputs add ``pose_aa``,
+    ``betas`` clipped to ±5 and ``transl_m`` (the relative translation put back over the CoP)."""
+    inputs, cop = track_inputs(tr, pitch_m, seed)
+    frames = np.arange(0, len(tr), frame_stride)
+    out = predict(inputs, encode, head, window, frames=frames)
+    out["pose_aa"] = rot6d_to_axis_angle(out["rot6d"])
+    out["betas"] = np.clip(out["betas"], -5, 5)
+    out["transl_m"] = out["transl_rel_m"] + np.concatenate([cop[frames], np.zeros((len(frames), 1))], -1)
+    return frames, out
+
+
 def track_metrics(tracks: list[Track], encode: Encode, head: Head, window: int, pitch_m: float, body,
                   frame_stride: int = 1, seed: int = 0) -> dict[str, float]:
     """Mean MPJPE (cm, pelvis-aligned), pelvis translation error (cm), activity accuracy over tracks."""
     err, terr, acc = [], [], []
     for i, tr in enumerate(tracks):
-        inputs, cop = track_inputs(tr, pitch_m, seed + i)
-        frames = np.arange(0, len(tr), frame_stride)
-        out = predict(inputs, encode, head, window, frames=frames)
-        pose = rot6d_to_axis_angle(out["rot6d"])
-        betas = np.clip(out["betas"], -5, 5)
-        joints = body.forward(pose, betas)["joints"]
+        frames, out = predict_track(tr, encode, head, window, pitch_m, seed + i, frame_stride)
+        joints = body.forward(out["pose_aa"], out["betas"])["joints"]
         gt = tr.joints_m[frames]
         err.append(np.linalg.norm((joints - joints[:, :1]) - (gt - gt[:, :1]), axis=-1).mean(-1))
-        transl = out["transl_rel_m"] + np.concatenate([cop[frames], np.zeros((len(frames), 1))], -1)
-        terr.append(np.linalg.norm(transl - tr.transl_m[frames], axis=-1))
+        terr.append(np.linalg.norm(out["transl_m"] - tr.transl_m[frames], axis=-1))
         acc.append(np.argmax(out["activity_logits"], -1) == tr.activity[frames])
     err, terr, acc = np.concatenate(err), np.concatenate(terr), np.concatenate(acc)
     return {"mpjpe_cm": float(err.mean() * 100), "transl_cm": float(terr.mean() * 100),

@@ -22,9 +22,8 @@ from typing import Any, Callable
 import numpy as np
 
 from edge.body import SMPL_JOINT_NAMES, BodyModel
-from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track
-from export.evaluate import predict, track_inputs
+from export.evaluate import predict_track, track_inputs
 
 GROUPS = ("activity", "subject", "people")
 
@@ -59,13 +58,8 @@ def frame_errors(tracks: list[Track], encode: Callable, head: Callable, window: 
     lite, full = bodies or _bodies()
     parts = []
     for i, tr in enumerate(tracks):
-        inputs, cop = track_inputs(tr, pitch_m, seed + i)
-        frames = np.arange(0, len(tr), frame_stride)
-        out = predict(inputs, encode, head, window, frames=frames)
-        pose = rot6d_to_axis_angle(out["rot6d"])
-        betas = np.clip(out["betas"], -5, 5)
-        transl = out["transl_rel_m"] + np.concatenate([cop[frames], np.zeros((len(frames), 1))], -1)
-        e = _errors(pose, betas, transl, tr, frames, lite, full)
+        frames, out = predict_track(tr, encode, head, window, pitch_m, seed + i, frame_stride)
+        e = _errors(out["pose_aa"], out["betas"], out["transl_m"], tr, frames, lite, full)
         e["activity_pred"] = np.argmax(out["activity_logits"], -1)
         e["confidence"] = np.asarray(out["confidence"], float)
         parts.append(e)
