@@ -109,7 +109,7 @@ def summarise(model: dict[str, np.ndarray], baseline: dict[str, np.ndarray] | No
     if baseline is not None:
         out["baseline"] = _stats(baseline, every)
         out["overall"]["mpjpe_vs_baseline"] = out["overall"]["mpjpe_cm"] / out["baseline"]["mpjpe_cm"]
-    name = {"activity": lambda v: ACTIVITIES[int(v)], "subject": lambda v: f"s{int(v):02d}", "people": lambda v: f"{int(v)} people"}
+    name = {"activity": lambda v: ACTIVITIES[int(v)], "subject": lambda v: f"s{int(v):02d}", "people": lambda v: "1 person" if int(v) == 1 else f"{int(v)} people"}
     for g in GROUPS:
         rows = {}
         for v in np.unique(model[g]):
