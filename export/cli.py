@@ -84,6 +84,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--stage", default="windows", choices=("windows", "head"),
                    help="windows: whole model end to end (the paper); head: temporal head only, cached features (fast)")
     f.add_argument("--threads", type=int, default=1)
+    f.add_argument("--precision", default="int8", choices=("int8", "fp32"),
+                   help="int8 (default; must pass the int8 gate on the held-out frames) or fp32")
     f.set_defaults(func=run_finetune)
 
     from export.benchmark import add_arguments as bench_arguments  # numpy only at import: torch comes with the run
@@ -218,7 +220,8 @@ def run_finetune(args: argparse.Namespace) -> int:
 
     try:
         report = finetune(args.bundle, args.data, args.fraction, args.out, steps=args.steps, lr=args.lr, stage=args.stage,
-                          split=args.split, subjects=args.subject or None, threads=args.threads)
+                          split=args.split, subjects=args.subject or None, threads=args.threads,
+                          precision=args.precision)
     except (BundleError, DatasetError, ValueError, RuntimeError) as exc:
         raise CliError(str(exc)) from None
     m = report["metrics"]
