@@ -43,6 +43,8 @@ run: venv $(VENV)/.viz
 test: test-deps
 	$(PY) -m pytest -q
 
+# speed against error: errors on `make model`'s unseen subjects when its datasets are there, speed only otherwise
+MODEL_DATA ?= $(HOME)/.cache/cavatar-model/data
 bench: test-deps
 	$(PY) bench/decoder_throughput.py
 	$(PY) bench/body_model.py
@@ -51,6 +53,8 @@ bench: test-deps
 	$(PY) bench/scene_pipeline.py
 	$(PY) bench/calibration_runtime.py
 	$(PY) bench/runtime_latency.py
+	$(PY) bench/speed_error.py $(foreach d,many48 train100k,$(if $(wildcard $(MODEL_DATA)/$(d)/manifest.json),--data $(MODEL_DATA)/$(d)))
+	$(PY) bench/readme_perf.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
