@@ -5,57 +5,19 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from edge.frames import RawFrame
 from edge.infer import ModelBundle
 from edge.runtime.config import default_bundle_path
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.model_input import person_pressure_kpa
 from edge.runtime.stages import FrameStages
-from edge.scene import PersonObservation, SceneFrame
+from scripted_stages import H, W, Calibrated, ScriptedScene, foot, frame, person
 
-H = W = 96
 PITCH = 0.01905
 
 
 @pytest.fixture(scope="module")
 def bundle():
     return ModelBundle.load(default_bundle_path(), grid=(H, W))
-
-
-def foot(r0, c0, kpa, h=12, w=6):
-    p = np.zeros((H, W), np.float32)
-    p[r0:r0 + h, c0:c0 + w] = kpa
-    return p
-
-
-def person(track_id, mask, still):
-    z = np.zeros(2)
-    return PersonObservation(track_id, z, 600.0, z, 600.0, 0.01, z, mask, (slice(0, 1), slice(0, 1)), 1, still, 1.0)
-
-
-class ScriptedScene:
-    """Stands in for SceneTracker: returns the scripted people per frame; holds the scripted live tracks."""
-
-    def __init__(self, script):
-        self.script = list(script)
-        self.people = SimpleNamespace(tracks={})
-        self.filters = SimpleNamespace(fill=lambda p, bad: p)
-
-    def update(self, pressure_kpa, t_s, masks=None):
-        people, alive = self.script.pop(0)
-        self.people.tracks = {k: SimpleNamespace(track_id=k) for k in alive}
-        return SceneFrame(t_s, True, None, people, not people, False, 0.05, pressure_kpa, {})
-
-
-class Calibrated:
-    """Stands in for CalibratedFrames: the frame's 'counts' are already kPa."""
-
-    def __init__(self):
-        self.counters = {}
-
-    def process(self, counts, t_s, temperature_c=None):
-        return SimpleNamespace(pressure_kpa=counts.astype(np.float32), masked=np.zeros((H, W), bool), advice=[],
-                               rejected=None)
 
 
 def make(bundle, script, encoded):
@@ -67,10 +29,6 @@ def make(bundle, script, encoded):
     bundle_proxy.encode = lambda x: (encoded.append(np.array(x)), encode(x))[1]
     st.bundle = bundle_proxy
     return st, counters
-
-
-def frame(k, pressure):
-    return RawFrame(pressure, k, k, k / 14.0, 1_800_000_000.0 + k / 14.0)
 
 
 def test_still_people_reuse_moving_people_run_gone_tracks_are_freed(bundle):

@@ -6,54 +6,16 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from edge.frames import RawFrame
 from edge.infer import ModelBundle
 from edge.runtime.config import default_bundle_path
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.stages import FrameStages
-from edge.scene import PersonObservation, SceneFrame
-
-H = W = 96
+from scripted_stages import H, W, Calibrated, ScriptedScene, foot, frame, person
 
 
 @pytest.fixture(scope="module")
 def bundle():
     return ModelBundle.load(default_bundle_path(), grid=(H, W))
-
-
-def foot(r0, c0, kpa, h=12, w=6):
-    p = np.zeros((H, W), np.float32)
-    p[r0:r0 + h, c0:c0 + w] = kpa
-    return p
-
-
-def person(track_id, mask, still):
-    z = np.zeros(2)
-    return PersonObservation(track_id, z, 600.0, z, 600.0, 0.01, z, mask, (slice(0, 1), slice(0, 1)), 1, still, 1.0)
-
-
-class ScriptedScene:
-    """Stands in for SceneTracker: the scripted (people, live track ids, empty) per frame."""
-
-    def __init__(self, script):
-        self.script = list(script)
-        self.people = SimpleNamespace(tracks={})
-        self.filters = SimpleNamespace(fill=lambda p, bad: p)
-
-    def update(self, pressure_kpa, t_s, masks=None):
-        people, alive, empty = self.script.pop(0)
-        self.people.tracks = {k: SimpleNamespace(track_id=k) for k in alive}
-        return SceneFrame(t_s, True, None, people, empty, False, 0.05, pressure_kpa, {})
-
-
-class Calibrated:
-    """Stands in for CalibratedFrames: the frame's 'counts' are already kPa."""
-
-    def __init__(self):
-        self.counters = {}
-
-    def process(self, counts, t_s, temperature_c=None):
-        return SimpleNamespace(pressure_kpa=counts.astype(np.float32), masked=np.zeros((H, W), bool), advice=[], rejected=None)
 
 
 A = foot(20, 20, 30.0) + foot(20, 34, 25.0)
@@ -80,7 +42,7 @@ def run(bundle, adaptive):
     proxy = SimpleNamespace(**{k: getattr(bundle, k) for k in ("normalise", "origin_m", "head", "manifest", "window", "features")})
     proxy.encode = lambda x: (encoded.append(np.array(x)), encode(x))[1]
     st.bundle = proxy
-    outs = [st.process(RawFrame(p, k, k, k / 14.0, 1_800_000_000.0 + k / 14.0)) for k, (_, p) in enumerate(SCRIPT)]
+    outs = [st.process(frame(k, p)) for k, (_, p) in enumerate(SCRIPT)]
     return outs, encoded, counters.snapshot()
 
 
