@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).parent.parent / "sinks"))  # sink_helpers:
 sys.path.insert(0, str(Path(__file__).parent.parent))  # test_edge_without_torch: BLOCK_TORCH
 
 from deploy_helpers import make_calibration, write_config  # noqa: E402
-from sink_helpers import Broker  # noqa: E402
+from sink_helpers import brokers  # noqa: E402
 
 
 @pytest.fixture
@@ -50,14 +50,4 @@ def config(tmp_path, calibration):
 
 @pytest.fixture
 def make_broker(tmp_path):
-    brokers = []
-
-    def make(users=None):
-        b = Broker(tmp_path / f"broker{len(brokers)}", users)
-        brokers.append(b)
-        b.start()
-        return b
-
-    yield make
-    for b in brokers:
-        b.stop()
+    yield from brokers(tmp_path)

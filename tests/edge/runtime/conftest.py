@@ -13,17 +13,12 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).parent.parent / "sinks"))  # sink_helpers: the mosquitto broker and subscriber
 
-from runtime_helpers import SEED, make_config  # noqa: E402
+from runtime_helpers import make_config, truth_calibration  # noqa: E402
 
 
 @pytest.fixture(scope="session")
 def sim_calibration(tmp_path_factory) -> Path:
-    from calibration.from_truth import calibration_from_truth
-    from sim.live import live_sensor
-
-    path = tmp_path_factory.mktemp("calibration") / f"calibration-sim-{SEED}.npz"
-    calibration_from_truth(live_sensor(SEED, 96), device_id=f"sim-{SEED}").save(path)
-    return path
+    return truth_calibration(tmp_path_factory.mktemp("calibration"))
 
 
 @pytest.fixture

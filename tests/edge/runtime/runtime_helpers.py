@@ -12,6 +12,17 @@ SEED = 7
 GRID = 96
 
 
+def truth_calibration(folder: Path) -> Path:
+    """The calibration a perfect procedure would make for ``sim://?seed=SEED`` (from the simulator's true
+    parameters: milliseconds, where the scripted session takes ~10 s at 96×96), saved in ``folder``."""
+    from calibration.from_truth import calibration_from_truth
+    from sim.live import live_sensor
+
+    path = Path(folder) / f"calibration-sim-{SEED}.npz"
+    calibration_from_truth(live_sensor(SEED, 96), device_id=f"sim-{SEED}").save(path)
+    return path
+
+
 def sim_url(people: int, **extra: Any) -> str:
     opts = {"people": people, "seed": SEED, "speed": 0, **extra}
     return "sim://?" + "&".join(f"{k}={v}" for k, v in opts.items())

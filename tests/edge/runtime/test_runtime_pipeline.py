@@ -122,16 +122,6 @@ def test_the_runtime_publishes_to_mqtt_with_the_password_from_the_environment(mq
 
 @pytest.fixture
 def mqtt_broker(tmp_path):
-    from sink_helpers import Broker
+    from sink_helpers import brokers
 
-    brokers = []
-
-    def make(users=None):
-        b = Broker(tmp_path / f"broker{len(brokers)}", users)
-        brokers.append(b)
-        b.start()
-        return b
-
-    yield make
-    for b in brokers:
-        b.stop()
+    yield from brokers(tmp_path)

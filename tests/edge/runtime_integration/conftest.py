@@ -17,17 +17,12 @@ for p in (HERE, HERE.parent / "runtime", HERE.parent / "sinks", ROOT):  # ROOT: 
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
-from runtime_helpers import SEED  # noqa: E402
+from runtime_helpers import truth_calibration  # noqa: E402
 
 
 @pytest.fixture(scope="session")
 def sim_calibration(tmp_path_factory) -> Path:
-    from calibration.from_truth import calibration_from_truth
-    from sim.live import live_sensor
-
-    path = tmp_path_factory.mktemp("calibration") / f"calibration-sim-{SEED}.npz"
-    calibration_from_truth(live_sensor(SEED, 96), device_id=f"sim-{SEED}").save(path)
-    return path
+    return truth_calibration(tmp_path_factory.mktemp("calibration"))
 
 
 @pytest.fixture(scope="session")
@@ -41,19 +36,9 @@ def one_person_frames():
 @pytest.fixture
 def mqtt_broker(tmp_path):
     """Factory: ``mqtt_broker()`` → a started mosquitto on a free 127.0.0.1 port (stopped after the test)."""
-    from sink_helpers import Broker
+    from sink_helpers import brokers
 
-    brokers = []
-
-    def make(users=None):
-        b = Broker(tmp_path / f"broker{len(brokers)}", users)
-        brokers.append(b)
-        b.start()
-        return b
-
-    yield make
-    for b in brokers:
-        b.stop()
+    yield from brokers(tmp_path)
 
 
 @pytest.fixture

@@ -13,23 +13,13 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from sink_helpers import Broker, Subscriber, body_record  # noqa: E402
+from sink_helpers import Subscriber, body_record, brokers  # noqa: E402
 
 
 @pytest.fixture
 def make_broker(tmp_path):
     """Factory: ``make_broker(users={"cavatar": "pw"})`` → a started Broker (stopped after the test)."""
-    brokers: list[Broker] = []
-
-    def make(users: dict[str, str] | None = None, tls: dict[str, str] | None = None) -> Broker:
-        b = Broker(tmp_path / f"broker{len(brokers)}", users, tls)
-        brokers.append(b)
-        b.start()
-        return b
-
-    yield make
-    for b in brokers:
-        b.stop()
+    yield from brokers(tmp_path)
 
 
 @pytest.fixture

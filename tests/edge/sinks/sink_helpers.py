@@ -111,6 +111,24 @@ class Broker:
         return f"mqtt://{at}127.0.0.1:{self.port}/{prefix}" + (f"?{query}" if query else "")
 
 
+def brokers(folder: Path):
+    """Generator for a pytest fixture: yields ``make(users=None, tls=None)`` → a started Broker in
+    ``folder``; every broker made is stopped when the fixture ends. (The one factory every test folder uses.)"""
+    made: list[Broker] = []
+
+    def make(users: dict[str, str] | None = None, tls: dict[str, str] | None = None) -> Broker:
+        b = Broker(folder / f"broker{len(made)}", users, tls)
+        made.append(b)
+        b.start()
+        return b
+
+    try:
+        yield make
+    finally:
+        for b in made:
+            b.stop()
+
+
 class Subscriber:
     """A paho subscriber that records (topic, payload, retain, time) for every message."""
 
