@@ -4,6 +4,7 @@ so `cavatar --help` works on a board without torch)."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 
 from edge.cli import CliError
@@ -101,6 +102,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     k.set_defaults(func=run_bench)
 
 
+@contextlib.contextmanager
+def _export_extra(what: str):
+    """Imports of the export stage inside: a missing torch/onnx becomes a CliError naming the extra."""
+    try:
+        yield
+    except ImportError as exc:
+        raise CliError(f"{what} needs the export extra (pip install '.[export]'): {exc}") from None
+
+
 def _parse_sets(items: list[str]) -> dict:
     out = {}
     for item in items:
@@ -115,11 +125,9 @@ def _parse_sets(items: list[str]) -> dict:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    try:
+    with _export_extra("training"):
         from export.model import ModelConfig
         from export.train import TrainConfig, train
-    except ImportError as exc:
-        raise CliError(f"training needs the export extra (pip install '.[export]'): {exc}") from None
     try:
         model_cfg = ModelConfig.preset(args.preset, **_parse_sets(args.set))
     except (TypeError, ValueError) as exc:
@@ -139,10 +147,8 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_bundle(args: argparse.Namespace) -> int:
-    try:
+    with _export_extra("bundling"):
         from export.bundle import build_bundle
-    except ImportError as exc:
-        raise CliError(f"bundling needs the export extra (pip install '.[export]'): {exc}") from None
     try:
         report = build_bundle(args.checkpoint, args.data, args.out, args.name, precision=args.precision)
     except (RuntimeError, ValueError, FileNotFoundError) as exc:
@@ -163,13 +169,12 @@ def _people_filter(text: str) -> tuple[int, int] | None:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    try:
+    with _export_extra("evaluation"):
         import numpy as np
+        import torch  # noqa: F401  (the tables' model outputs and body twin are the export stage's)
 
         from export.finetune import user_tracks
         from export.tables import evaluate_bundle, markdown
-    except ImportError as exc:
-        raise CliError(f"evaluation needs the export extra (pip install '.[export]'): {exc}") from None
     from pathlib import Path
 
     from edge.infer import BundleError, verify
@@ -211,10 +216,10 @@ def run_eval(args: argparse.Namespace) -> int:
 
 
 def run_finetune(args: argparse.Namespace) -> int:
-    try:
+    with _export_extra("fine-tuning"):
+        import torch  # noqa: F401  (export.finetune imports the model lazily)
+
         from export.finetune import finetune
-    except ImportError as exc:
-        raise CliError(f"fine-tuning needs the export extra (pip install '.[export]'): {exc}") from None
     from edge.infer import BundleError
     from sim.dataset import DatasetError
 
@@ -230,12 +235,10 @@ def run_finetune(args: argparse.Namespace) -> int:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    try:
+    with _export_extra("benchmarking"):
         import torch  # noqa: F401
 
         from export.benchmark import BenchmarkError, run_from_args, summary
-    except ImportError as exc:
-        raise CliError(f"benchmarking needs the export extra (pip install '.[export]'): {exc}") from None
     try:
         result = run_from_args(args, prog="cavatar bench")
     except BenchmarkError as exc:

@@ -109,3 +109,16 @@ def test_finetune_sweep_judges_every_fraction_on_the_same_frames(bundle, tiny_da
     assert set(result["mpjpe_cm"]["s02"]) == {"0%", "40%"} and result["setup"]["held_out"] == "the last 60% of every track"
     assert all(np.isfinite(v) for v in result["mean_mpjpe_cm"].values())
     assert "| s02 |" in (tmp_path / "ft.md").read_text()
+
+
+@pytest.mark.parametrize("argv", [["train", "--data", "d", "--out", "o"], ["bundle", "c.pt", "--data", "d", "--out", "o", "--name", "n"],
+                                  ["eval", "--bundle", "b", "--data", "d", "--out", "o"],
+                                  ["finetune", "--bundle", "b", "--data", "d", "--fraction", "0.5", "--out", "o"]])
+def test_export_commands_without_torch_name_the_extra(argv, monkeypatch, capsys):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "torch", None)  # a board: no torch
+    for name in [m for m in sys.modules if m.startswith("export.") and m != "export.cli"]:
+        monkeypatch.delitem(sys.modules, name)
+    assert main(argv) == 2
+    assert "needs the export extra (pip install '.[export]')" in capsys.readouterr().err
