@@ -23,7 +23,7 @@ import random
 import signal
 import sys
 import time
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -65,11 +65,9 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "TrainConfig":
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise ValueError(f"unknown training config keys {unknown}")
-        return cls(**d)
+        from export.model.config import strict_from_dict
+
+        return strict_from_dict(cls, d, "training")
 
     def data_paths(self) -> list[str]:
         paths = [self.data] if isinstance(self.data, str) else list(self.data)
