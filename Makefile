@@ -60,7 +60,7 @@ bench: test-deps
 # What the board publishes, scored against the virtual carpet's truth (issue 12): the standard scene set
 # through `cavatar run`'s own runtime → bench/results/score.json, docs/score/score.{md,png}, README's accuracy block.
 score: venv $(VENV)/.viz
-	$(VENV)/bin/cavatar score --set standard --work out/score/work --json bench/results/score.json \
+	$(PY) -m edge score --set standard --work out/score/work --json bench/results/score.json \
 		--md docs/score/score.md --png docs/score/score.png
 	$(PY) -m export.score.readme
 
