@@ -38,6 +38,7 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
     from edge.body import BodyModel
     from edge.provenance import git_revision
 
+    revision = git_revision()  # of the code that runs, before anything is committed meanwhile
     body = BodyModel.load("lite")  # the body the simulator poses and the shipped bundle is trained on
     judged, entries, timeline, models = [], [], {}, set()
     t_all = time.monotonic()
@@ -63,7 +64,7 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
             say(f"score: {scene.name} {run.status}: {run.reason}")
         entries.append(entry)
     summary = summarise(judged, RATE_HZ)
-    return {"schema": SCHEMA, "set": set_name, "command": command, "machine": machine(), "git_revision": git_revision(),
+    return {"schema": SCHEMA, "set": set_name, "command": command, "machine": machine(), "git_revision": revision,
             "date": datetime.now(timezone.utc).isoformat(timespec="seconds"), "model": sorted(models),
             "match_threshold_m": threshold_m, "calibration": calibration, "rate_hz": RATE_HZ,
             "score_s": round(time.monotonic() - t_all, 1), "scenes": entries, **summary, "timeline": timeline}
