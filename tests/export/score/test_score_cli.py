@@ -26,6 +26,8 @@ def test_quick_set_scores_every_published_record(quick):
     assert scene["status"] == "scored" and scene["frames"] == 70
     line = r["timeline"][scene["name"]]
     assert len(line["true"]) == len(line["published"]) == 70 and set(line["true"]) == {1}
+    (labels,) = line["chunk_activities"]  # 5 s: one simulated scene, one person, its activity named
+    assert len(labels) == 1 and labels[0] in r["by_activity"] and labels[0] != "standing"
     # what the timeline says was published is what the JSON-lines sink holds, frame for frame
     records = [json.loads(x) for x in (out / "work" / f"{scene['name']}.bodies.jsonl").read_text().splitlines()]
     with_people = [len(x["people"]) for x in records if x["people"]]
