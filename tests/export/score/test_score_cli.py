@@ -77,9 +77,10 @@ def test_a_scene_that_cannot_start_is_reported_not_fatal(quick, tmp_path, capsys
     (["--set", "quick", "--match-m", "0"], "--match-m must be > 0"),
     (["--set", "quick", "--calibration", "/nonexistent.npz"], "no such file"),
     (["--render", "/nonexistent.json"], "cannot read it"),
+    (["--set", "quick", "--work", "/proc/score-work"], "cannot create /proc/score-work"),
 ])
 def test_bad_input_is_one_line_and_exit_2(argv, says, tmp_path, capsys):
-    assert main(["score", *argv, "--out", str(tmp_path / "x"), "--work", str(tmp_path / "w")]) == 2
+    assert main(["score", "--out", str(tmp_path / "x"), "--work", str(tmp_path / "w"), *argv]) == 2
     err = capsys.readouterr().err
     assert says in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not list(tmp_path.glob("x.*"))
