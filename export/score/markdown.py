@@ -46,7 +46,9 @@ def markdown(result: dict[str, Any], png_name: str = "score.png") -> str:
              "(scene, subject): each 10-s scene of the virtual carpet puts the people somewhere new. Pose errors over "
              "matched person-frames: MPJPE pelvis-aligned, PA-MPJPE after Procrustes, local MPJPE with the true global "
              "orientation, heading = rotation about the vertical (export/metrics.py). ms/frame: the pipeline's time per "
-             "frame (calibrate → record queued), on a shared machine.", "",
+             "frame (calibrate → record queued) while the virtual carpet makes the next frames in the same process (its "
+             "reader thread holds the GIL for the contact physics), on a shared machine: an upper bound; "
+             "bench/runtime_latency.py times the stages alone.", "",
              f"*{m['cpu_count']} cores, load average {'/'.join(f'{x:g}' for x in m['load_average_1_5_15_min'])}, "
              f"{result['date']}, git {result['git_revision'][:12]}, model {', '.join(result['model']) or '—'}, calibration "
              f"{result['calibration']}: `{result['command']}` ({result['score_s']:.0f} s).*", "",
