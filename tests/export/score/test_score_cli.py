@@ -45,6 +45,7 @@ def test_quick_set_writes_markdown_and_png(quick):
     _, out = quick
     md = (out / "q.md").read_text()
     assert "| 1 person | 70 |" in md and "](q.png)" in md and "threshold 0.5 m" in md
+    assert "| 1 person: extra-track frames % |" in md and "2 people" not in md  # targets of what was scored only
     assert (out / "q.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -31,6 +31,20 @@ def _score(tmp_path, mpjpe_m=0.2):
     return path
 
 
+def test_targets_say_met_and_not_met(tmp_path):
+    from export.score.markdown import targets
+
+    result = json.loads(_score(tmp_path).read_text())
+    two = {**result["by_people"]["1"], "count_right_pct": 98.0, "mota_pct": 94.99, "idsw_per_10_person_min": None}
+    lines = targets({**result, "by_people": {**result["by_people"], "2": two}})
+    assert "| 1 person: extra-track frames % | 25.00 | ≤ 1 | not met |" in lines
+    assert "| 1 person: extra-track frames %, worst activity (squat) | 25.00 | ≤ 1 | not met |" in lines
+    assert "| 2 people: count right % | 98.00 | ≥ 98 | met |" in lines
+    assert "| 2 people: MOTA % | 94.99 | ≥ 95 | not met |" in lines
+    assert "| 2 people: identity switches / 10 person-min | — | ≤ 1 | — |" in lines
+    assert not any(line.startswith("| 3 people") for line in lines)
+
+
 def test_write_then_check_then_stale(tmp_path):
     readme = tmp_path / "README.md"
     readme.write_text(f"# x\n\n{BEGIN}\nold\n{END}\ntail\n")
