@@ -195,17 +195,20 @@ class Runtime:
         return self._ended.wait(timeout_s)
 
     def stop(self, timeout_s: float = 10.0) -> dict:
-        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'."""
+        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'.
+
+        Bounded: everything within ``timeout_s`` (a sink that does not finish by then is abandoned)."""
         with self._lock:
             if self._stopped:
                 return self.snapshot()
             self._stopped = True
+        deadline = time.monotonic() + timeout_s
         self._stop.set()
         if self.state == "running":
             self.state = "stopping"
             self.write_status()
         for t in self._threads:
-            t.join(timeout=timeout_s)
+            t.join(timeout=max(0.0, deadline - time.monotonic()))
         if self.source is not None:
             try:
                 self.source.stop()
@@ -214,7 +217,7 @@ class Runtime:
         if self.publisher is not None:
             if self.state in ("stopping", "failed"):
                 self.publisher.put_info(self.info(state="stopped" if self.error is None else "failed"))
-            self.publisher.close(timeout_s)
+            self.publisher.close(max(0.5, deadline - time.monotonic()))
         if self.state != "new":
             self.state = "failed" if self.error else "stopped"
             self.write_status()

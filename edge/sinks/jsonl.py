@@ -88,7 +88,9 @@ class JsonlSink(Sink):
         self.rotate_s = rotate_s
         self.keep = keep
         self.flush_ms = flush_ms
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()     # the gathered lines; held only briefly
+        self._io_lock = threading.Lock()  # the file; held across writes
+        self._writing = 0
         self._buf: list[bytes] = []
         self._t_calls: list[float] = []
         self._fd: int | None = None
@@ -165,36 +167,60 @@ class JsonlSink(Sink):
         with self._lock:
             self._buf.append(line.encode() + b"\n")
             self._t_calls.append(t_call)
-            if self.flush_ms <= 0 or (time.monotonic() - self._t_calls[0]) * 1000.0 >= self.flush_ms:
-                self._flush_locked()
+            due = self.flush_ms <= 0 or (time.monotonic() - self._t_calls[0]) * 1000.0 >= self.flush_ms
+        if due:
+            self._flush()
 
     def flush(self, timeout_s: float = 5.0) -> bool:
         """Write whatever is gathered now."""
-        with self._lock:
-            self._flush_locked()
+        self._flush()
         return True
 
-    def _flush_locked(self) -> None:
-        if not self._buf:
-            return
-        data = b"".join(self._buf)
-        n, t_calls = len(self._buf), self._t_calls
-        self._buf, self._t_calls = [], []
-        try:
-            if self.path is None:
-                sys.stdout.write(data.decode())
-                sys.stdout.flush()
-            else:
-                self._maybe_rotate(len(data))
-                self._write_whole(data)
-        except (OSError, ValueError) as exc:  # disk full, stdout closed: count, log, keep going
-            self.counters.add("errors")
-            self.counters.add("dropped", n)
-            log.error("jsonl:// %s: %d records not written: %s", self.describe(), n, exc)
-            return
+    def _flush(self) -> None:
+        """Take the gathered lines (``_lock``, never held across I/O, so ``stats()`` never waits on a
+        blocked write) and write them (``_io_lock``)."""
+        with self._io_lock:
+            with self._lock:
+                if not self._buf:
+                    return
+                data = b"".join(self._buf)
+                n, t_calls = len(self._buf), self._t_calls
+                self._buf, self._t_calls = [], []
+                self._writing = n
+            try:
+                if self.path is None:
+                    self._write_stdout(data)
+                else:
+                    self._maybe_rotate(len(data))
+                    self._write_whole(data)
+            except (OSError, ValueError) as exc:  # disk full, stdout closed: count, log, keep going
+                self.counters.add("errors")
+                self.counters.add("dropped", n)
+                log.error("jsonl:// %s: %d records not written: %s", self.describe(), n, exc)
+                return
+            finally:
+                with self._lock:
+                    self._writing = 0
         now = time.monotonic()
         for t in t_calls:
             self.counters.delivered(now - t)
+
+    @staticmethod
+    def _write_stdout(data: bytes) -> None:
+        """Straight to file descriptor 1 where there is one: a write blocked on a full pipe then holds no
+        Python lock (``sys.stdout``'s would stop the interpreter from exiting)."""
+        try:
+            fd = sys.stdout.fileno()
+        except (AttributeError, OSError, ValueError):
+            fd = None
+        if fd is None:
+            sys.stdout.write(data.decode())
+            sys.stdout.flush()
+            return
+        sys.stdout.flush()
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
 
     def _maybe_rotate(self, incoming: int) -> None:
         too_big = self.rotate_bytes and self._size and self._size + incoming > self.rotate_bytes
@@ -235,13 +261,13 @@ class JsonlSink(Sink):
 
     def _gauges(self) -> dict[str, Any]:
         with self._lock:
-            return {"queued": len(self._buf), "rotations": self.rotations}
+            return {"queued": len(self._buf) + self._writing, "rotations": self.rotations}
 
     def close(self) -> None:
         if self.closed:
             return
-        with self._lock:
-            self._flush_locked()
+        self._flush()
+        with self._io_lock:
             self.closed = True
             if self._fd is not None:
                 try:
