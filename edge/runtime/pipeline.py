@@ -334,6 +334,9 @@ class Runtime:
                      "adc_bits": int(info.adc_bits), "rate_hz": round(info.rate_mhz / 1000.0, 3),
                      "firmware": f"{info.fw_major}.{info.fw_minor}.{info.fw_patch}",
                      "protocol_version": int(info.protocol_version)}
+        state = self.state
+        if state == "running" and st.get("board_mismatch"):
+            state = "board_mismatch"  # another board answered: frames held back (edge.sources.carpet)
         src_queue = dict(st.get("source", {}))
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
@@ -353,7 +356,7 @@ class Runtime:
             except Exception as exc:
                 publish["sinks"][redact(sink.describe())] = {"error": str(exc)}
         return {
-            "schema": SCHEMA, "device": self.config.device.id, "state": self.state, "error": self.error,
+            "schema": SCHEMA, "device": self.config.device.id, "state": state, "error": self.error,
             "end_reason": self.end_reason, "pid": os.getpid(), "version": __version__,
             "started": self._started_wall, "updated": now,
             "uptime_s": round(uptime, 3), "fps": round(self._fps, 2),
@@ -361,7 +364,7 @@ class Runtime:
             "people": self.stages.people_now if self.stages else 0,
             "source": {"url": redact(self.config.source.url), "board": board, "queue": src_queue,
                        "decoder": st.get("decoder", {}), "assembly": st.get("frames", {}),
-                       "board_status": st.get("board_status", {})},
+                       "board_status": st.get("board_status", {}), "board_mismatch": st.get("board_mismatch")},
             "frames": frames, "invalid_reasons": self.invalid.snapshot(), "work": work,
             "stages_ms": self.times.summary(), "publish": publish,
             "calibration": self._calibration_status(now), "model": self._model_status(),
