@@ -1,6 +1,6 @@
-"""Writes the wire part of the hostile corpus (tests/corpus/hostile/wire/*.bin): byte streams an attacker
-or bad luck would send, each with valid COBS framing and packet CRCs. The expected outcome of each is in
-tests/corpus/hostile/expected.json; test_hostile_corpus.py replays the committed files.
+"""Writes the hostile corpus: byte streams an attacker or bad luck would send (wire/*.bin, each with valid
+COBS framing and packet CRCs) and damaged calibration files (calibration/*.npz). The expected outcome of
+each is in tests/corpus/hostile/expected.json; test_hostile_corpus.py replays the committed files.
 
     .venv/bin/python tests/corpus/make_hostile_corpus.py     # rewrite the files (deterministic)
 
@@ -10,6 +10,7 @@ read 3000, so a test can tell whose frames came through.
 
 from __future__ import annotations
 
+import json
 import zlib
 from pathlib import Path
 
@@ -17,7 +18,8 @@ import numpy as np
 
 from firmware_protocol import codec
 
-HERE = Path(__file__).parent / "hostile" / "wire"
+ROOT = Path(__file__).parent / "hostile"
+HERE = ROOT / "wire"
 ROWS, COLS = 8, 6
 PACKED12 = codec.PACKING["packed12"]
 
@@ -119,11 +121,83 @@ def build() -> dict[str, bytes]:
     return {name: stream.bytes() for name, stream in out.items()}
 
 
+def valid_calibration() -> bytes:
+    """A valid calibration of board A (8×6), byte for byte the same every time."""
+    import io
+    import tempfile
+
+    from calibration.file import Calibration
+
+    cal = Calibration(np.full((ROWS, COLS), 2000.0, np.float32), np.full((ROWS, COLS), 3.0, np.float32),
+                      np.ones((ROWS, COLS), np.float32), np.zeros((ROWS, COLS), np.uint8),
+                      device={"device_id": "carpet-A", "rows": ROWS, "cols": COLS, "adc_bits": 12, "sign": -1},
+                      pitch_m=0.01905, created="2026-01-01T00:00:00+00:00")
+    with tempfile.TemporaryDirectory() as tmp:
+        cal.save(Path(tmp) / "c.npz")
+        return (Path(tmp) / "c.npz").read_bytes()
+
+
+def _npz(members: dict[str, bytes]) -> bytes:
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, data in members.items():
+            zf.writestr(zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0)), data, zipfile.ZIP_DEFLATED)
+    return buf.getvalue()
+
+
+def _members(npz: bytes) -> dict[str, bytes]:
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(io.BytesIO(npz)) as zf:
+        return {i.filename: zf.read(i) for i in zf.infolist()}
+
+
+def _npy(array: np.ndarray) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.lib.format.write_array(buf, array, allow_pickle=True)
+    return buf.getvalue()
+
+
+def build_calibrations() -> dict[str, bytes]:
+    """Finding 8: every damage is one clear line, nothing inflated before it is checked."""
+    good = valid_calibration()
+    out = {"empty": b"", "truncated": good[: len(good) // 2]}
+    flipped = bytearray(good)
+    flipped[len(good) // 3] ^= 0x10
+    out["bit_flipped"] = bytes(flipped)
+    members = _members(good)
+    bomb = dict(members)
+    bomb["gain.npy"] = _npy(np.zeros(8 << 20))  # 64 MB of zeros in ~64 KB
+    out["bomb"] = _npz(bomb)
+    pickled = dict(members)
+    pickled["meta.npy"] = _npy(np.array([{"schema": "x"}], dtype=object))
+    out["pickled_meta"] = _npz(pickled)
+    huge = dict(members)
+    huge["meta.npy"] = _npy(np.array(json.dumps({"schema": "cavatar.calibration/1",
+                                                  "device": {"rows": 100000, "cols": 100000}})))
+    out["huge_grid"] = _npz(huge)
+    extra = dict(members)
+    extra["payload.npy"] = _npy(np.zeros(4))
+    out["extra_member"] = _npz(extra)
+    out["not_a_zip"] = b"PK\x03\x04" + bytes(200)
+    return out
+
+
 def main() -> None:
     HERE.mkdir(parents=True, exist_ok=True)
     for name, data in build().items():
         (HERE / f"{name}.bin").write_bytes(data)
-        print(f"{name}.bin: {len(data)} bytes")
+        print(f"wire/{name}.bin: {len(data)} bytes")
+    (ROOT / "calibration").mkdir(parents=True, exist_ok=True)
+    for name, data in build_calibrations().items():
+        (ROOT / "calibration" / f"{name}.npz").write_bytes(data)
+        print(f"calibration/{name}.npz: {len(data)} bytes")
 
 
 if __name__ == "__main__":
