@@ -14,8 +14,9 @@ runtime.
 
 :meth:`close` drains: every record queued before it is published, then each sink is
 closed (an MQTT sink publishes "offline" before it disconnects; a JSON-lines file is
-flushed and fsynced), all within one ``timeout_s``. A sink still busy then is abandoned
-(its worker is a daemon thread), logged with the records it did not publish.
+flushed and fsynced), all within one ``timeout_s``. A sink still busy then, or stuck in one
+publish call for ``stall_s``, is abandoned (its worker is a daemon thread), logged with the
+records it did not publish.
 
 Presence (people count and activities) goes to the sinks when the count changes, or when
 the activities change and the last presence is at least ``presence_s`` old: a low-rate
@@ -56,6 +57,7 @@ class _SinkWorker:
         self.presence: tuple[int, tuple[str, ...]] | None = None
         self.closing = False
         self.dropped = 0
+        self.busy_since: float | None = None  # monotonic time the current publish call began; None between calls
         self.thread = threading.Thread(target=self.run, name=f"publisher-{index}", daemon=True)
 
     def put(self, entry: _Entry) -> _Entry | None:
@@ -78,6 +80,18 @@ class _SinkWorker:
         with self.cond:
             return len(self.records)
 
+    def call(self, method: str, *args: Any) -> None:
+        self.busy_since = time.monotonic()
+        try:
+            self.pub._call(self.sink, method, *args)
+        finally:
+            self.busy_since = None
+
+    def stuck(self, now: float, stall_s: float) -> bool:
+        """In one publish call for more than ``stall_s`` (a sink's own close() is bounded by the sink)."""
+        since = self.busy_since
+        return since is not None and now - since > stall_s
+
     def run(self) -> None:
         pub = self.pub
         try:
@@ -92,13 +106,13 @@ class _SinkWorker:
                         break  # closing and drained
                 if entry is not None:
                     t0 = time.perf_counter()
-                    pub._call(self.sink, "publish_bodies", entry.record)
+                    self.call("publish_bodies", entry.record)
                     pub.times.add("publish", (time.perf_counter() - t0) * 1e3)
                     pub._handled(entry)
                 if info is not None:
-                    pub._call(self.sink, "publish_info", info)
+                    self.call("publish_info", info)
                 if presence is not None:
-                    pub._call(self.sink, "publish_presence", presence[0], list(presence[1]))
+                    self.call("publish_presence", presence[0], list(presence[1]))
         finally:
             try:
                 self.sink.close()
@@ -182,8 +196,9 @@ class Publisher:
         """Most records one sink's queue holds (``queue_records``); beyond it its oldest is dropped."""
         return self._max
 
-    def close(self, timeout_s: float = 10.0) -> None:
-        """Publish everything queued, close every sink; all within ``timeout_s``, a stuck sink abandoned."""
+    def close(self, timeout_s: float = 10.0, stall_s: float = 2.0) -> None:
+        """Publish everything queued, close every sink; all within ``timeout_s``. A sink stuck in one publish call
+        for more than ``stall_s`` is abandoned at once (a pipe nobody reads never drains)."""
         if self._closed:
             return
         self._closed = True
@@ -198,13 +213,17 @@ class Publisher:
             for worker in self._workers:
                 worker.run()
             return
-        deadline = time.monotonic() + timeout_s
-        for worker in self._workers:
-            worker.thread.join(timeout=max(0.0, deadline - time.monotonic()))
+        t0 = time.monotonic()
+        deadline = t0 + timeout_s
+        waiting = list(self._workers)
+        while waiting and time.monotonic() < deadline:
+            waiting[0].thread.join(timeout=min(0.05, max(0.0, deadline - time.monotonic())))
+            now = time.monotonic()
+            waiting = [w for w in waiting if w.thread.is_alive() and not w.stuck(now, stall_s)]
         for worker in self._workers:
             if worker.thread.is_alive():
-                log.error("publisher: %s still busy after %.0f s; abandoned with %d records not published",
-                          worker.sink.describe(), timeout_s, worker.queued())
+                log.error("publisher: %s still busy after %.1f s; abandoned with %d records not published",
+                          worker.sink.describe(), time.monotonic() - t0, worker.queued())
 
     # ------------------------------------------------------------------ the workers
     def _handled(self, entry: _Entry, publish: bool = True) -> None:

@@ -140,3 +140,46 @@ def test_jsonl_stdout_blocked_on_a_full_pipe_still_answers_stats(monkeypatch):
         out.close()
         reader.join(10)
         os.close(r)
+
+
+def test_sigterm_finishes_while_jsonl_stdout_is_blocked_and_the_other_sink_keeps_going(tmp_path, sim_calibration):
+    """The attack: `cavatar run --sink jsonl:- | sleep 600` (a reader that never reads), then SIGTERM."""
+    import json
+    import signal
+    import subprocess
+
+    from runtime_helpers import read_jsonl, sim_url
+
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "edge", "run", "--source", sim_url(1), "--calibration", str(sim_calibration),
+           "--sink", "jsonl:-", "--sink", f"jsonl://{out}/bodies.jsonl", "--status-file", str(out / "status.json"),
+           "--quiet"]
+    r, w = os.pipe()  # stdout: a pipe nobody reads (64 KB, ~60 records)
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=w, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    os.close(w)
+    try:
+        deadline = time.monotonic() + 90
+        file_sink = out / "bodies.jsonl"
+        while time.monotonic() < deadline:  # well past what the pipe holds: the file sink did not wait for stdout
+            if file_sink.exists() and file_sink.read_bytes().count(b"\n") >= 100:
+                break
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.2)
+        else:
+            pytest.fail("the file sink got fewer than 100 records within 90 s")
+        status = json.loads((out / "status.json").read_text())
+        assert time.time() - status["updated"] < 10  # the status file is still being written
+        proc.send_signal(signal.SIGTERM)
+        t0 = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        took = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        os.close(r)
+    assert proc.returncode == 0, err
+    assert took < 20, f"SIGTERM took {took:.1f} s"  # a stuck sink is abandoned after 2 s; generous under load
+    assert "jsonl:- still busy" in err and "Traceback" not in err
+    records = read_jsonl(out / "bodies.jsonl")
+    assert [r["seq"] for r in records] == list(range(len(records)))
