@@ -38,10 +38,14 @@ def write_status(path: str | Path, status: dict[str, Any]) -> None:
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
-        f.write("\n")
-    os.replace(tmp, p)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
+            f.write("\n")
+        os.replace(tmp, p)
+    except BaseException:  # a full folder: the temporary file does not stay behind
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def _jsonable(obj: Any) -> Any:

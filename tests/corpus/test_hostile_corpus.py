@@ -84,3 +84,9 @@ def test_the_committed_files_are_what_the_generator_writes():
         for name, data in built.items():
             assert (CORPUS / folder / f"{name}{suffix}").read_bytes() == data, \
                 f"{folder}/{name}{suffix}: rerun tests/corpus/make_hostile_corpus.py"
+
+
+def test_inspect_reports_a_board_swap_instead_of_crashing(capsys):
+    assert main(["inspect", str(CORPUS / "wire" / "board_swap_grid.bin")]) == 0
+    out = capsys.readouterr().out
+    assert "frames 3 " in out and "another board answered 1 time(s)" in out and "rows 6 (was 8)" in out
