@@ -106,6 +106,7 @@ PUBLISH_COUNTERS = (
     "published",            # records handed to every sink
     "sink_errors",          # sink publish calls that raised (logged; the record may be lost for that sink)
     "info_published",       # info payloads handed to the sinks
+    "seq_unreserved",       # records not published: their seq could not be reserved on disk (edge.runtime.seq)
 )
 
 

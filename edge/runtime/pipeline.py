@@ -64,6 +64,8 @@ class Runtime:
             ChosenCalibration(calibration, Path(getattr(calibration, "path", "(given)")), False) if calibration is not None else None)
         self.stages: FrameStages | None = None
         self.publisher: Publisher | None = None
+        self.seqs: Any = None  # edge.runtime.seq.SeqLedger while set up
+        self._seq_start = 0
         self.on_outcome: list[Callable[[FrameOutcome], None]] = []  # called in the pipeline thread (tests, the demo)
         self._stop = threading.Event()
         self._ended = threading.Event()
@@ -79,6 +81,26 @@ class Runtime:
     # ------------------------------------------------------------------ setup
     def setup(self) -> None:
         """Load and check everything; open the sinks last, so a refusal leaves no output behind. SetupError."""
+        from edge.runtime.seq import SeqLedger, SeqLedgerBusy, SeqLedgerError
+
+        status = self.config.status_path()
+        ledger = SeqLedger(status, self.config.device.id)
+        try:  # first: a second runtime on this status file is refused before it touches the board
+            self._seq_start = ledger.open(at_least=self._previous_seq() + 1)
+        except (SeqLedgerBusy, SeqLedgerError) as exc:
+            raise SetupError(str(exc)) from None
+        except OSError as exc:
+            raise SetupError(f"status file {status}: cannot keep its seq ledger beside it ({exc}); set [runtime] "
+                             "status_file (--status-file) to a writable place") from None
+        self.seqs = ledger
+        try:
+            self._setup()
+        except BaseException:
+            ledger.discard()
+            self.seqs = None
+            raise
+
+    def _setup(self) -> None:
         from calibration.runtime import CalibratedFrames
         from edge.infer import BundleError, ModelBundle
         from edge.runtime.reader import open_timed_source
@@ -122,7 +144,7 @@ class Runtime:
             scene = SceneTracker(grid[0], grid[1], cal.pitch_m, cfg.scene)
             self.stages = FrameStages(calibrated, scene, self.bundle, device=cfg.device.id, times=self.times,
                                       counters=self.counters, invalid=self.invalid,
-                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._previous_seq() + 1)
+                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._seq_start)
             status = cfg.status_path()
             try:
                 status.parent.mkdir(parents=True, exist_ok=True)
@@ -195,17 +217,20 @@ class Runtime:
         return self._ended.wait(timeout_s)
 
     def stop(self, timeout_s: float = 10.0) -> dict:
-        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'."""
+        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'.
+
+        Bounded: everything within ``timeout_s`` (a sink that does not finish by then is abandoned)."""
         with self._lock:
             if self._stopped:
                 return self.snapshot()
             self._stopped = True
+        deadline = time.monotonic() + timeout_s
         self._stop.set()
         if self.state == "running":
             self.state = "stopping"
             self.write_status()
         for t in self._threads:
-            t.join(timeout=timeout_s)
+            t.join(timeout=max(0.0, deadline - time.monotonic()))
         if self.source is not None:
             try:
                 self.source.stop()
@@ -214,10 +239,12 @@ class Runtime:
         if self.publisher is not None:
             if self.state in ("stopping", "failed"):
                 self.publisher.put_info(self.info(state="stopped" if self.error is None else "failed"))
-            self.publisher.close(timeout_s)
+            self.publisher.close(max(0.5, deadline - time.monotonic()))
         if self.state != "new":
             self.state = "failed" if self.error else "stopped"
             self.write_status()
+        if self.seqs is not None:
+            self.seqs.close(next_seq=self.stages.seq if self.stages is not None else None)
         return self.snapshot()
 
     def run_for(self, frames: int | None = None, seconds: float | None = None, timeout_s: float = 120.0) -> dict:
@@ -257,7 +284,7 @@ class Runtime:
                             log.exception("frame %d failed", frame.index)
                         out = None
                     if out is not None:
-                        if out.record is not None:
+                        if out.record is not None and self._reserve_seq(out.record["seq"]):
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
@@ -281,6 +308,17 @@ class Runtime:
                 self.end_reason = "failed" if self.error else ("frame limit" if self._limit_reached() else "stop requested")
             self._ended.set()
             self._stop.set()
+
+    def _reserve_seq(self, seq: int) -> bool:
+        """True once ``seq`` is reserved on disk (edge.runtime.seq); a record whose seq is not is never published."""
+        try:
+            self.seqs.reserve(seq)
+            return True
+        except OSError as exc:
+            if not self.counters.get("seq_unreserved"):
+                log.error("seq ledger %s: %s; records are not published until it can be written", self.seqs.path, exc)
+            self.counters.add("seq_unreserved")
+            return False
 
     def _limit_reached(self) -> bool:
         return self._frame_limit is not None and self.counters.get("frames_in") >= self._frame_limit
@@ -331,6 +369,9 @@ class Runtime:
                      "adc_bits": int(info.adc_bits), "rate_hz": round(info.rate_mhz / 1000.0, 3),
                      "firmware": f"{info.fw_major}.{info.fw_minor}.{info.fw_patch}",
                      "protocol_version": int(info.protocol_version)}
+        state = self.state
+        if state == "running" and st.get("board_mismatch"):
+            state = "board_mismatch"  # another board answered: frames held back (edge.sources.carpet)
         src_queue = dict(st.get("source", {}))
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
@@ -350,7 +391,7 @@ class Runtime:
             except Exception as exc:
                 publish["sinks"][redact(sink.describe())] = {"error": str(exc)}
         return {
-            "schema": SCHEMA, "device": self.config.device.id, "state": self.state, "error": self.error,
+            "schema": SCHEMA, "device": self.config.device.id, "state": state, "error": self.error,
             "end_reason": self.end_reason, "pid": os.getpid(), "version": __version__,
             "started": self._started_wall, "updated": now,
             "uptime_s": round(uptime, 3), "fps": round(self._fps, 2),
@@ -358,7 +399,7 @@ class Runtime:
             "people": self.stages.people_now if self.stages else 0,
             "source": {"url": redact(self.config.source.url), "board": board, "queue": src_queue,
                        "decoder": st.get("decoder", {}), "assembly": st.get("frames", {}),
-                       "board_status": st.get("board_status", {})},
+                       "board_status": st.get("board_status", {}), "board_mismatch": st.get("board_mismatch")},
             "frames": frames, "invalid_reasons": self.invalid.snapshot(), "work": work,
             "stages_ms": self.times.summary(), "publish": publish,
             "calibration": self._calibration_status(now), "model": self._model_status(),

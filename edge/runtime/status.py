@@ -1,14 +1,15 @@
 """The status file: the runtime's health, rewritten atomically every second; and how to print it.
 
 Schema ``cavatar.status/1`` (JSON). Top level: schema, device, state (running, stopping,
-stopped, failed), error, end_reason, pid, version, started, updated (Unix seconds),
+stopped, failed; board_mismatch while another board answers and its frames are held back), error, end_reason, pid, version, started, updated (Unix seconds),
 uptime_s, fps (over the last status period), fps_mean (over the run), people (confirmed
 people in the last frame), and the groups:
 
 - ``source``: url (password redacted), board (device id, grid, ADC bits, rate, firmware),
   ``queue`` (frames dropped for a slow pipeline, reconnects, stalls), ``decoder`` (packets,
   bytes, dropped by reason, e.g. bad_crc, missed), ``assembly`` (crc_mismatch, torn_dropped,
-  missed_frames, duplicate_frames, …), ``board_status`` (the board's last STATUS packet);
+  missed_frames, duplicate_frames, …), ``board_status`` (the board's last STATUS packet),
+  ``board_mismatch`` (why frames are held back: another board's identity; null otherwise);
 - ``frames``: frames_in, frames_invalid, frames_empty, frames_unconfirmed, frames_people,
   frames_failed; ``invalid_reasons``: reason → count;
 - ``work``: person_frames, encoder_runs, head_runs, still_reuses, tracks_started,
@@ -37,10 +38,14 @@ def write_status(path: str | Path, status: dict[str, Any]) -> None:
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
-        f.write("\n")
-    os.replace(tmp, p)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
+            f.write("\n")
+        os.replace(tmp, p)
+    except BaseException:  # a full folder: the temporary file does not stay behind
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def _jsonable(obj: Any) -> Any:
@@ -102,6 +107,8 @@ def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
     ]
     board = src.get("board") or {}
     q, dec, asm = src.get("queue", {}), src.get("decoder", {}), src.get("assembly", {})
+    if src.get("board_mismatch"):
+        lines.append(f"  BOARD MISMATCH, nothing published: {src['board_mismatch']}")
     lines += [
         f"source {src.get('url')}: board {board.get('device_id', '-')} {board.get('rows', '?')}x{board.get('cols', '?')}, "
         f"{board.get('adc_bits', '?')}-bit, {board.get('rate_hz', '?')} Hz, firmware {board.get('firmware', '-')}",

@@ -196,7 +196,7 @@ class MqttSink(Sink):
         self._spooling = False
         if config.spool:
             try:
-                self._spool = Spool(config.spool, int(config.spool_mb * 1e6))
+                self._spool = Spool(config.spool, int(config.spool_mb * 1e6), device=device)
             except OSError as exc:
                 raise SinkError(f"mqtt:// spool: {exc}") from None
             self._spool.seal()
@@ -330,6 +330,7 @@ class MqttSink(Sink):
             out["spooled"] = len(self._spool)
             out["dropped"] = self.counters.values["dropped"] + self._spool.dropped
             out["spool_bytes"] = self._spool.size_bytes()
+            out["spool_refused"] = self._spool.refused + self._spool.foreign  # lines/files there not ours: never sent
         return out
 
     # -- publishing -----------------------------------------------------------------------
