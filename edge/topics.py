@@ -7,9 +7,11 @@ lists them; a test keeps the two in step)::
     <prefix>/<device>/info      JSON                   QoS 1, retained
     <prefix>/<device>/bodies    cavatar.bodies/1       QoS from the sink URL, not retained
     <prefix>/<device>/presence  cavatar.presence/1     QoS 1, retained, published on change
+    <prefix>/<device>/board     "online" / "offline"   QoS 1, retained: frames arriving from the board
     homeassistant/binary_sensor/<device>_presence/config   Home Assistant discovery,
-    homeassistant/sensor/<device>_people/config            QoS 1, retained; availability
-    homeassistant/sensor/<device>_activity/config          is the status topic
+    homeassistant/sensor/<device>_people/config            QoS 1, retained; the carpet's
+    homeassistant/sensor/<device>_activity/config          entities are available while
+                                                           status AND board are "online"
 
     t = DeviceTopics("cavatar", "carpet-01")
     t.status            # 'cavatar/carpet-01/status'
@@ -55,13 +57,17 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec("<prefix>/<device>/bodies", "JSON, schema cavatar.bodies/1", "URL ?qos= (default 1)", False,
               "The stream: one record per frame with people, a heartbeat (people: []) when empty."),
     TopicSpec("<prefix>/<device>/presence", "JSON, schema cavatar.presence/1", "1", True,
-              "Low-rate derived state, published when the people count or the activities change."),
+              "Low-rate derived state, published when the people count or the activities change; "
+              "withdrawn (count 0) when the board is lost."),
+    TopicSpec("<prefix>/<device>/board", '"online" | "offline" (plain text)', "1", True,
+              "Board availability: \"online\" while frames arrive, \"offline\" after [source] board_timeout_s "
+              "without a good frame (unplugged, hung, bad CRCs) and on a clean stop."),
     TopicSpec("homeassistant/binary_sensor/<device>_presence/config", "JSON, Home Assistant discovery", "1", True,
-              "Occupancy binary sensor from presence.present; availability = status topic."),
+              "Occupancy binary sensor from presence.present; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_people/config", "JSON, Home Assistant discovery", "1", True,
-              "People count sensor from presence.count; availability = status topic."),
+              "People count sensor from presence.count; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_activity/config", "JSON, Home Assistant discovery", "1", True,
-              "Activity sensor from presence.activity; availability = status topic."),
+              "Activity sensor from presence.activity; available while status and board are online."),
     TopicSpec("homeassistant/status", '"online" (subscribed)', "1", False,
               "Home Assistant's birth message; on \"online\" the discovery configs are republished."),
 )
@@ -115,6 +121,10 @@ class DeviceTopics:
         return f"{self.base}/presence"
 
     @property
+    def board(self) -> str:
+        return f"{self.base}/board"
+
+    @property
     def all(self) -> str:
         """Wildcard for everything this device publishes under the prefix."""
         return f"{self.base}/#"
@@ -129,8 +139,8 @@ class DeviceTopics:
     def ha_discovery(self, sw_version: str = "") -> list[tuple[str, dict]]:
         """Home Assistant discovery configs (topic, payload) for presence, people count, activity.
 
-        Each entity reads the retained presence topic and is available while the status
-        topic says "online".
+        Each entity reads the retained presence topic and is available while both the status
+        topic (the runtime) and the board topic (frames arriving) say "online".
         """
         device = {
             "identifiers": [f"cavatar_{self.device}"],
@@ -142,9 +152,9 @@ class DeviceTopics:
             device["sw_version"] = sw_version
         common = {
             "state_topic": self.presence,
-            "availability_topic": self.status,
-            "payload_available": ONLINE,
-            "payload_not_available": OFFLINE,
+            "availability": [{"topic": t, "payload_available": ONLINE, "payload_not_available": OFFLINE}
+                             for t in (self.status, self.board)],
+            "availability_mode": "all",
             "device": device,
         }
         entities = [

@@ -74,6 +74,11 @@ def summary_line(s: dict[str, Any], previous: dict[str, Any] | None, dt_s: float
         extra += f" invalid {fr['frames_invalid']}"
     if pub["queue_dropped"] or pub["sink_errors"]:
         extra += f" publish-dropped {pub['queue_dropped']} sink-errors {pub['sink_errors']}"
+    board = s.get("board_health") or {}
+    if board.get("connected") is False:  # say it, rather than a stale "people 1" beside 0.0 fps
+        return (f"[{s['uptime_s']:6.1f} s] frames {fr['frames_in']:6d}  BOARD: {board.get('reason') or 'no frames'} "
+                f"(unavailable; last frame {board.get('last_frame_age_s', 0):.0f} s ago)  published {pub['published']}"
+                f"{extra}")
     return (f"[{s['uptime_s']:6.1f} s] frames {fr['frames_in']:6d} {fps:5.1f} fps  people {s['people']}  "
             f"dropped {q.get('dropped_slow_consumer', 0)} lost {lost}  {ms}  published {pub['published']} "
             f"({pub['heartbeats']} heartbeats){extra}")

@@ -86,6 +86,15 @@ def _when(t: float | None) -> str:
     return datetime.fromtimestamp(t, timezone.utc).astimezone().strftime("%Y-%m-%d %H:%M:%S")
 
 
+def _board_line(health: dict[str, Any] | None) -> str:
+    if not health:
+        return "  board health: -"
+    if health.get("connected"):
+        return f"  board health: connected (last frame {health.get('last_frame_age_s', 0):.1f} s ago)"
+    return (f"  board health: LOST, reported unavailable — {health.get('reason') or 'no frames'} "
+            f"(last frame {health.get('last_frame_age_s', 0):.0f} s ago; limit {health.get('timeout_s')} s)")
+
+
 def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
     """A readable multi-line report of a status dict (what `cavatar status` prints)."""
     import time
@@ -108,6 +117,7 @@ def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
         f"  {s.get('fps', 0):.1f} fps now, {s.get('fps_mean', 0):.1f} on average; dropped for a slow pipeline "
         f"{q.get('dropped_slow_consumer', 0)}, "
         f"reconnects {q.get('reconnects', 0)}, stalls {q.get('stalls', 0)}",
+        _board_line(s.get("board_health")),
         f"  decoder: {dec.get('packets', 0)} packets, dropped {dec.get('dropped_total', 0)}{_reasons(dec.get('dropped'))}, "
         f"missed {dec.get('missed', 0)}; frames: crc mismatch {asm.get('crc_mismatch', 0)}, "
         f"torn {asm.get('torn_dropped', 0)}, missed {asm.get('missed_frames', 0)}, duplicate {asm.get('duplicate_frames', 0)}",

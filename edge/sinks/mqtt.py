@@ -8,8 +8,8 @@ the URL: it is read from the environment variable named by ``password_env``
 
 Behaviour
 - Connects in the background and reconnects forever (back-off up to ``retry_s``); a broker
-  that is down at start is not an error. On every connect: status (retained), info
-  (retained), presence (retained), Home Assistant discovery (retained, if ``ha=1``).
+  that is down at start is not an error. On every connect: status, info, board, presence
+  (all retained), Home Assistant discovery (retained, if ``ha=1``).
 - Last will: ``status`` = "offline" (QoS 1, retained), sent by the broker when the process
   dies or hangs (after about 1.5 × ``keepalive``). A clean ``close()`` publishes "offline"
   itself first, because a graceful disconnect does not trigger the will.
@@ -187,6 +187,7 @@ class MqttSink(Sink):
         self._info: dict | None = None
         self._presence: dict | None = None
         self._presence_key: tuple | None = None
+        self._board: bool | None = None  # info's board_connected: frames arriving from the board
         self._last_refusal = ""
         self.connects = 0
         self.counters.add("spooled_total", 0)
@@ -263,6 +264,11 @@ class MqttSink(Sink):
         self._info = info_payload(self.device, info, time.time())
         if self._connected:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
+        board = info.get("board_connected")
+        if isinstance(board, bool) and board != self._board:  # the board's availability, retained, on change
+            self._board = board
+            if self._connected:
+                self._send(self.topics.board, ONLINE if board else OFFLINE, 1, True, "board")
 
     def publish_presence(self, count: int, activities: Sequence[str]) -> None:
         """Retained presence state, published only when the count or the activities change."""
@@ -299,6 +305,8 @@ class MqttSink(Sink):
             self._drainer.join(timeout=self.config.close_s + 1)
         deadline = time.monotonic() + max(0.0, self.config.close_s)
         if self._connected:
+            if self._board is not None:  # a stopped runtime reads no frames
+                self._send(self.topics.board, OFFLINE, 1, True, "board")
             self._send(self.topics.status, OFFLINE, 1, True, "status")
             with self._acks:
                 while self._pending and self._connected and time.monotonic() < deadline:
@@ -478,15 +486,19 @@ class MqttSink(Sink):
         self._last_refusal = ""
         self.connects += 1
         log.info("mqtt:// connected to %s", self.config.describe())
+        # Connected before the retained states are sent: a state another thread changes meanwhile is then either
+        # read below or sent by that thread itself (it updates the state first, then looks at _connected).
+        self._connected = True
         self._send(self.topics.status, ONLINE if self._online else OFFLINE, 1, True, "status")
         if self._info is not None:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
+        if self._board is not None:
+            self._send(self.topics.board, ONLINE if self._board else OFFLINE, 1, True, "board")
         if self.config.ha:
             self._send_discovery()
             client.subscribe(self.topics.ha_status, qos=1)
         if self._presence is not None:
             self._send(self.topics.presence, dumps(self._presence), 1, True, "presence")
-        self._connected = True
         self._connected_evt.set()
         self._wake.set()
 

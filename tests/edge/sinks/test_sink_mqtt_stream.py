@@ -123,8 +123,9 @@ def test_home_assistant_discovery_payloads(broker, subscribe):
     configs = {t: json.loads(p) for t, p, _, _ in ha.messages if t.endswith("/config")}
     assert set(configs) == expected
     for topic, cfg in configs.items():
-        assert cfg["availability_topic"] == T.status
-        assert cfg["payload_available"] == "online" and cfg["payload_not_available"] == "offline"
+        assert cfg["availability_mode"] == "all"  # the runtime AND the board (frames arriving)
+        assert [(a["topic"], a["payload_available"], a["payload_not_available"]) for a in cfg["availability"]] == [
+            (T.status, "online", "offline"), (T.board, "online", "offline")]
         assert cfg["state_topic"] == T.presence
         assert cfg["unique_id"].startswith("cavatar_") and "value_template" in cfg
         assert cfg["device"]["identifiers"] == [f"cavatar_{DEVICE}"]
