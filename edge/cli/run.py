@@ -10,6 +10,11 @@ Flags override the configuration file; without either, the shipped model bundle
 Ctrl-C stops cleanly: the reader stops, queued records are published, the sinks say
 "offline" and close, the status file says "stopped", exit 0. A bad configuration, a
 tampered bundle or a calibration of another carpet: one paragraph, exit 2, no output written.
+
+A broker that is down does not stop the run (records are queued or spooled, it reconnects),
+but a sink that never connected during the whole run ends it with a WARNING line and exit 1.
+--require-sinks [S] refuses to start unless every MQTT sink connects within S seconds
+(default 10): one line, exit 1, the carpet never read.
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ import time
 from typing import Any
 
 from edge.cli import CliError
+
+REQUIRE_SINKS_S = 10.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,6 +48,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--device", metavar="ID", help="device id in records and MQTT topics (overrides [device] id)")
     p.add_argument("--status-file", metavar="FILE", help="status file (overrides [runtime] status_file)")
     p.add_argument("--quiet", action="store_true", help="no per-second summary line")
+    p.add_argument("--require-sinks", type=float, nargs="?", const=REQUIRE_SINKS_S, default=None, metavar="S",
+                   help=f"refuse to start (exit 1) unless every MQTT sink connects within S seconds (default "
+                        f"{REQUIRE_SINKS_S:g}); without it a broker that is down at start is waited for in the background")
     p.set_defaults(func=run)
 
 
@@ -84,8 +94,31 @@ def summary_line(s: dict[str, Any], previous: dict[str, Any] | None, dt_s: float
             f"({pub['heartbeats']} heartbeats){extra}")
 
 
-def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None) -> tuple[int, dict[str, Any]]:
-    """Run until the configured seconds, the end of the source, SIGTERM or Ctrl-C; (exit code, final status)."""
+def unconnected_sinks(sinks: list, timeout_s: float) -> list[str]:
+    """The sinks (described) that connect to something and did not within ``timeout_s`` (waited for together)."""
+    from edge.sinks import redact
+
+    deadline = time.monotonic() + timeout_s
+    missing = []
+    for sink in sinks:
+        wait = getattr(sink, "wait_connected", None)
+        if wait is not None and not wait(max(0.0, deadline - time.monotonic())):
+            missing.append(redact(sink.describe()))
+    return missing
+
+
+def never_connected(final: dict[str, Any]) -> list[str]:
+    """Sinks of a finished run that connect to something (they count ``connects``) and never did."""
+    return [url for url, st in (final.get("publish", {}).get("sinks") or {}).items()
+            if isinstance(st, dict) and st.get("connects") == 0]
+
+
+def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None,
+          require_sinks_s: float | None = None) -> tuple[int, dict[str, Any]]:
+    """Run until the configured seconds, the end of the source, SIGTERM or Ctrl-C; (exit code, final status).
+
+    Exit code 1 when the run failed or a sink never connected; ``require_sinks_s``: refuse to start (1) unless every
+    connecting sink connects within that many seconds."""
     from edge.runtime import Runtime, SetupError
     from edge.sinks import redact
 
@@ -94,6 +127,14 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None) -> tuple[int, d
         rt.setup()
     except SetupError as exc:
         raise CliError(str(exc)) from None
+    if require_sinks_s is not None:
+        missing = unconnected_sinks(rt.sinks or [], require_sinks_s)
+        if missing:
+            final = rt.stop()
+            print(f"cavatar run: not started: {', '.join(missing)} did not connect within {require_sinks_s:g} s "
+                  "(--require-sinks); the WARNING above says why. Check the broker (`cavatar doctor`).",
+                  file=sys.stderr)
+            return 1, final
     handlers = {}
 
     def on_signal(signum: int, frame: Any) -> None:
@@ -121,6 +162,11 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None) -> tuple[int, d
         for sig, old in handlers.items():
             signal.signal(sig, old)
     code = 1 if final.get("error") else 0
+    silent = never_connected(final)
+    if silent:  # a run whose records never reached the broker did not do its job, however cleanly it stopped
+        code = 1
+        print(f"cavatar run: WARNING: {', '.join(silent)} never connected during the run: no record reached it "
+              "(exit 1). Check the broker's host and port (`cavatar doctor`).", file=sys.stderr)
     if not quiet:
         print(summary_line(final, None, 0.0), file=sys.stderr)
         w = final["work"]
@@ -134,5 +180,5 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None) -> tuple[int, d
 
 def run(args: argparse.Namespace) -> int:
     cfg = config_from_args(args)
-    code, _ = serve(cfg, quiet=args.quiet)
+    code, _ = serve(cfg, quiet=args.quiet, require_sinks_s=args.require_sinks)
     return code

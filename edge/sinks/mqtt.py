@@ -8,8 +8,12 @@ the URL: it is read from the environment variable named by ``password_env``
 
 Behaviour
 - Connects in the background and reconnects forever (back-off up to ``retry_s``); a broker
-  that is down at start is not an error. On every connect: status, info, board, presence
-  (all retained), Home Assistant discovery (retained, if ``ha=1``).
+  that is down at start is not an error, but it is loud: the first failed attempt of every
+  outage is a WARNING with the reason (name does not resolve, connection refused, no answer),
+  and the first connection and every recovery are a WARNING too ("connected to …"), so the
+  journal confirms both. ``cavatar run`` exits 1 when a sink never connected during the run
+  (``--require-sinks`` refuses to start without the broker). On every connect: status,
+  info, board, presence (all retained), Home Assistant discovery (retained, if ``ha=1``).
 - Last will: ``status`` = "offline" (QoS 1, retained), sent by the broker when the process
   dies or hangs (after about 1.5 × ``keepalive``). A clean ``close()`` publishes "offline"
   itself first, because a graceful disconnect does not trigger the will.
@@ -30,6 +34,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import socket
 import ssl
 import threading
 import time
@@ -156,6 +161,27 @@ def open_sink(url: str, device: str, **kwargs: Any) -> "MqttSink":
     return MqttSink(parse(url), device, **kwargs)
 
 
+def unreachable_reason(host: str, port: int, timeout_s: float = 1.0) -> str:
+    """Why a broker cannot be reached, in words (paho's on_connect_fail does not say): the name does not resolve,
+    or the TCP connection's error (refused, timed out, no route)."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        return f"the host name {host!r} does not resolve ({exc.strerror or exc})"
+    except OSError as exc:
+        return f"the host name {host!r} cannot be looked up ({exc})"
+    family, kind, proto, _, address = infos[0]
+    try:
+        with socket.socket(family, kind, proto) as s:
+            s.settimeout(timeout_s)
+            s.connect(address)
+    except socket.timeout:
+        return f"no answer from {address[0]}:{port} within {timeout_s:g} s (firewall, wrong host, broker hung)"
+    except OSError as exc:
+        return f"{exc.strerror or exc} at {address[0]}:{port} (is the broker running, on this port?)"
+    return "the TCP connection opens but the MQTT connection failed (TLS or protocol mismatch?)"
+
+
 class _Pending:
     """A message handed to paho and not yet delivered."""
 
@@ -190,6 +216,8 @@ class MqttSink(Sink):
         self._board: bool | None = None  # info's board_connected: frames arriving from the board
         self._last_refusal = ""
         self.connects = 0
+        self._down_since: float | None = time.monotonic()  # not connected since (None: connected)
+        self._failures_said = False  # the current outage's first failure is logged, once
         self.counters.add("spooled_total", 0)
         self.counters.add("connect_failures", 0)
 
@@ -485,7 +513,13 @@ class MqttSink(Sink):
             return
         self._last_refusal = ""
         self.connects += 1
-        log.info("mqtt:// connected to %s", self.config.describe())
+        down = time.monotonic() - self._down_since if self._down_since is not None else 0.0
+        failed = self.counters.values.get("connect_failures", 0)
+        # WARNING, the journal's level: the first connection and every recovery are confirmed there, once each
+        log.warning("mqtt:// connected to %s%s", self.config.describe(),
+                    "" if self.connects == 1 and not self._failures_said else
+                    f" again after {down:.1f} s ({failed} failed attempts so far)")
+        self._down_since, self._failures_said = None, False
         # Connected before the retained states are sent: a state another thread changes meanwhile is then either
         # read below or sent by that thread itself (it updates the state first, then looks at _connected).
         self._connected = True
@@ -508,9 +542,23 @@ class MqttSink(Sink):
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
         self.counters.add("connect_failures")
+        if not self._failures_said and not self.closed:  # once per outage, with the reason; recovery says so too
+            self._failures_said = True
+            log.warning("mqtt:// cannot connect to %s:%d: %s; %s; retrying every %g s at most", self.config.host,
+                        self.config.port, unreachable_reason(self.config.host, self.config.port), self._meanwhile(),
+                        self.config.retry_s)
+
+    def _meanwhile(self) -> str:
+        if self._spool is not None:
+            return "records wait in the spool until it connects"
+        if self.config.qos == 0:
+            return "records are dropped (qos=0) until it connects"
+        return f"records wait in memory (up to max_queued={self.config.max_queued}) until it connects"
 
     def _on_disconnect(self, client: Any, userdata: Any, flags: Any, reason_code: Any, properties: Any) -> None:
         self._connected = False
+        if self._down_since is None:
+            self._down_since = time.monotonic()
         self._connected_evt.clear()
         with self._acks:
             lost = [mid for mid, p in self._pending.items() if p.qos == 0]
