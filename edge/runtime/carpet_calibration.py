@@ -69,8 +69,10 @@ def _how_to_calibrate(scheme: str, url: str) -> str:
                "--board board.bin --stance stance.bin --holdout holdout.bin --mass KG --out calibration.npz` "
                "(record each step with `cavatar record`)")
     else:
-        how = (f"run the guided calibration on this carpet once: `cavatar calibrate --source '{url}' --mass KG "
-               "--out /var/lib/cavatar/calibration.npz` (KG: the mass of the person doing the poses)")
+        how = ("run the guided calibration on this carpet once, as the service user who owns /var/lib/cavatar and "
+               "with the service stopped (it holds the port): `sudo systemctl stop cavatar; sudo -u cavatar cavatar "
+               f"calibrate --source '{url}' --mass KG --out /var/lib/cavatar/calibration.npz` (KG: the mass of the "
+               "person doing the poses)")
     return (f"no calibration for {url}: a real carpet's readings mean nothing until it is calibrated. To fix it, {how}; "
             "then start again with `cavatar run --calibration /var/lib/cavatar/calibration.npz` (or set "
             "[calibration] file in the configuration).")
