@@ -8,10 +8,8 @@ lists them; a test keeps the two in step)::
     <prefix>/<device>/bodies    cavatar.bodies/1       QoS from the sink URL, not retained
     <prefix>/<device>/presence  cavatar.presence/1     QoS 1, retained, published on change
     <prefix>/<device>/board     "online" / "offline"   QoS 1, retained: frames arriving from the board
-    homeassistant/binary_sensor/<device>_presence/config   Home Assistant discovery,
-    homeassistant/sensor/<device>_people/config            QoS 1, retained; the carpet's
-    homeassistant/sensor/<device>_activity/config          entities are available while
-                                                           status AND board are "online"
+    homeassistant/<component>/<device>_<entity>/config     Home Assistant discovery, QoS 1,
+                                                           retained (edge/ha_discovery.py)
 
     t = DeviceTopics("cavatar", "carpet-01")
     t.status            # 'cavatar/carpet-01/status'
@@ -67,7 +65,18 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec("homeassistant/sensor/<device>_people/config", "JSON, Home Assistant discovery", "1", True,
               "People count sensor from presence.count; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_activity/config", "JSON, Home Assistant discovery", "1", True,
-              "Activity sensor from presence.activity; available while status and board are online."),
+              "Activity sensor (enum of the model's labels and none) from presence.activity; available while status "
+              "and board are online."),
+    TopicSpec("homeassistant/binary_sensor/<device>_board/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: board connected (connectivity) from the board topic; available while status is online."),
+    TopicSpec("homeassistant/sensor/<device>_fps/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: frames per second from info.health.fps."),
+    TopicSpec("homeassistant/binary_sensor/<device>_calibration_due/config", "JSON, Home Assistant discovery", "1",
+              True, "Diagnostic: calibration due (problem) from info.calibration.due."),
+    TopicSpec("homeassistant/sensor/<device>_dropped_frames/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: frames dropped or lost on the link, from info.health."),
+    TopicSpec("homeassistant/sensor/<device>_runtime_state/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: runtime state (enum running/stopping/stopped/failed) from info.state."),
     TopicSpec("homeassistant/status", '"online" (subscribed)', "1", False,
               "Home Assistant's birth message; on \"online\" the discovery configs are republished."),
 )
@@ -136,48 +145,11 @@ class DeviceTopics:
     def ha_config_topic(self, component: str, object_id: str) -> str:
         return f"{self.ha_prefix}/{component}/{self.device}_{object_id}/config"
 
-    def ha_discovery(self, sw_version: str = "") -> list[tuple[str, dict]]:
-        """Home Assistant discovery configs (topic, payload) for presence, people count, activity.
+    def ha_discovery(self, sw_version: str = "", activities: Sequence[str] | None = None) -> list[tuple[str, dict]]:
+        """Home Assistant discovery configs (topic, payload): see :mod:`edge.ha_discovery`."""
+        from edge.ha_discovery import discovery
 
-        Each entity reads the retained presence topic and is available while both the status
-        topic (the runtime) and the board topic (frames arriving) say "online".
-        """
-        device = {
-            "identifiers": [f"cavatar_{self.device}"],
-            "name": f"CAvatar {self.device}",
-            "manufacturer": "CAvatar",
-            "model": "CAvatar Edge carpet",
-        }
-        if sw_version:
-            device["sw_version"] = sw_version
-        common = {
-            "state_topic": self.presence,
-            "availability": [{"topic": t, "payload_available": ONLINE, "payload_not_available": OFFLINE}
-                             for t in (self.status, self.board)],
-            "availability_mode": "all",
-            "device": device,
-        }
-        entities = [
-            ("binary_sensor", "presence", {
-                "name": "Presence", "device_class": "occupancy",
-                "value_template": "{{ 'ON' if value_json.present else 'OFF' }}",
-                "payload_on": "ON", "payload_off": "OFF",
-            }),
-            ("sensor", "people", {
-                "name": "People", "icon": "mdi:account-group", "state_class": "measurement",
-                "unit_of_measurement": "people", "value_template": "{{ value_json.count }}",
-            }),
-            ("sensor", "activity", {
-                "name": "Activity", "icon": "mdi:run",
-                "value_template": "{{ value_json.activity }}",
-            }),
-        ]
-        out = []
-        for component, object_id, fields in entities:
-            payload = {"unique_id": f"cavatar_{self.device}_{object_id}",
-                       "object_id": f"{self.device}_{object_id}", **fields, **common}
-            out.append((self.ha_config_topic(component, object_id), payload))
-        return out
+        return discovery(self, sw_version, activities)
 
 
 def presence_payload(device: str, count: int, activities: Sequence[str], time_s: float) -> dict:

@@ -439,6 +439,7 @@ class Runtime:
             "firmware": board.get("firmware"), "protocol_version": board.get("protocol_version"),
             "grid": [board.get("rows"), board.get("cols")] if board else None, "rate_hz": board.get("rate_hz"),
             "board_connected": None if s["board_health"] is None else s["board_health"]["connected"],
+            "activities": list(self.bundle.activities) if self.bundle is not None else None,
             "calibration": {"sha256": cal.get("sha256"), "created": cal.get("created"), "age_days": cal.get("age_days"),
                             "max_age_days": cal.get("max_age_days"), "due": cal.get("due"), "automatic": cal.get("automatic")},
             "started": s["started"], "uptime_s": s["uptime_s"],

@@ -214,6 +214,7 @@ class MqttSink(Sink):
         self._presence: dict | None = None
         self._presence_key: tuple | None = None
         self._board: bool | None = None  # info's board_connected: frames arriving from the board
+        self._activities: list[str] | None = None  # info's activities: the model's labels (the HA activity enum)
         self._last_refusal = ""
         self.connects = 0
         self._down_since: float | None = time.monotonic()  # not connected since (None: connected)
@@ -292,6 +293,11 @@ class MqttSink(Sink):
         self._info = info_payload(self.device, info, time.time())
         if self._connected:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
+        acts = info.get("activities")
+        if isinstance(acts, list) and acts != self._activities:  # the activity sensor's options follow the model
+            self._activities = [str(a) for a in acts]
+            if self._connected and self.config.ha:
+                self._send_discovery()
         board = info.get("board_connected")
         if isinstance(board, bool) and board != self._board:  # the board's availability, retained, on change
             self._board = board
@@ -537,7 +543,7 @@ class MqttSink(Sink):
         self._wake.set()
 
     def _send_discovery(self) -> None:
-        for topic, payload in self.topics.ha_discovery(sw_version=__version__):
+        for topic, payload in self.topics.ha_discovery(sw_version=__version__, activities=self._activities):
             self._send(topic, dumps(payload), 1, True, "discovery")
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
