@@ -1,10 +1,11 @@
 """`cavatar run`: the edge runtime — frames from a carpet, private 3D bodies to MQTT or files.
 
-    cavatar run                                        # the virtual carpet → out/cavatar/bodies.jsonl
+    cavatar run                                        # /etc/cavatar/cavatar.toml if installed, else the virtual carpet
     cavatar run --config /etc/cavatar/cavatar.toml
     cavatar run --source serial:///dev/ttyACM0 --calibration cal.npz --sink mqtt://cavatar@broker/cavatar
 
-Flags override the configuration file; without either, the shipped model bundle
+Without --config, $CAVATAR_CONFIG or else /etc/cavatar/cavatar.toml (when it exists) is used,
+and the first line says which. Flags override the configuration file; without either, the shipped model bundle
 (edge/models/lean-96), the virtual carpet and a JSON-lines file out/cavatar/bodies.jsonl
 (status in out/cavatar/status.json). One summary line per second on stderr. SIGTERM or
 Ctrl-C stops cleanly: the reader stops, queued records are published, the sinks say
@@ -38,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n", 1)[1].split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--config", metavar="FILE", help="TOML configuration (see `cavatar config show`, deploy/cavatar.example.toml)")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration (see `cavatar config show`, deploy/cavatar.example.toml); "
+                   "default: $CAVATAR_CONFIG, else /etc/cavatar/cavatar.toml when it exists, else the built-in defaults")
     p.add_argument("--source", metavar="URL", help="source URL (overrides [source] url), e.g. 'sim://?people=2&seed=7'")
     p.add_argument("--calibration", metavar="FILE", help="calibration file from `cavatar calibrate` (overrides [calibration] file)")
     p.add_argument("--bundle", metavar="DIR", help="model bundle folder (overrides [model] bundle; default: the shipped one)")
@@ -56,13 +58,19 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The configuration: the file (or the defaults) with the flags applied; CliError listing every problem."""
-    from edge.runtime.config import ConfigError, RuntimeConfig, load_config
+    return config_and_choice(args)[0]
+
+
+def config_and_choice(args: argparse.Namespace) -> tuple[Any, Any]:
+    """(configuration with the flags applied, :class:`~edge.runtime.config_choice.ConfigChoice`); CliError."""
+    from edge.runtime.config import ConfigError
+    from edge.runtime.config_choice import load_chosen
 
     try:
-        cfg = load_config(args.config) if args.config else RuntimeConfig()
+        cfg, choice = load_chosen(args.config)
         return cfg.with_overrides(source=args.source, calibration=args.calibration, bundle=args.bundle, sinks=args.sink,
                                   seconds=args.seconds, device=args.device,
-                                  status_file=getattr(args, "status_file", None))
+                                  status_file=getattr(args, "status_file", None)), choice
     except ConfigError as exc:
         raise CliError(f"{exc}\nFix the configuration (`cavatar config validate FILE` checks it; `cavatar config show` "
                        "describes every key).") from None
@@ -113,8 +121,8 @@ def never_connected(final: dict[str, Any]) -> list[str]:
             if isinstance(st, dict) and st.get("connects") == 0]
 
 
-def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None,
-          require_sinks_s: float | None = None) -> tuple[int, dict[str, Any]]:
+def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None, require_sinks_s: float | None = None,
+          config_note: str = "") -> tuple[int, dict[str, Any]]:
     """Run until the configured seconds, the end of the source, SIGTERM or Ctrl-C; (exit code, final status).
 
     Exit code 1 when the run failed or a sink never connected; ``require_sinks_s``: refuse to start (1) unless every
@@ -148,7 +156,7 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None,
         sinks = ", ".join(redact(u) for u in cfg.sinks.urls)
         print(f"cavatar run: {redact(cfg.source.url)} → {sinks}; model {rt.bundle.version}; status "
               f"{cfg.status_path()}{'' if cfg.runtime.seconds <= 0 else f'; stops after {cfg.runtime.seconds:g} s'}"
-              "; Ctrl-C stops", file=sys.stderr, flush=True)
+              f"; Ctrl-C stops{f' ({config_note})' if config_note else ''}", file=sys.stderr, flush=True)
         period = cfg.runtime.summary_s if cfg.runtime.summary_s > 0 and not quiet else 0.5
         previous, t_prev = rt.snapshot(), time.monotonic()
         while not rt.wait(period):
@@ -179,6 +187,6 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None,
 
 
 def run(args: argparse.Namespace) -> int:
-    cfg = config_from_args(args)
-    code, _ = serve(cfg, quiet=args.quiet, require_sinks_s=args.require_sinks)
+    cfg, choice = config_and_choice(args)
+    code, _ = serve(cfg, quiet=args.quiet, require_sinks_s=args.require_sinks, config_note=choice.describe)
     return code
