@@ -288,6 +288,9 @@ class Runtime:
             self._ended.set()
             self._stop.set()
 
+    def _limit_reached(self) -> bool:
+        return self._frame_limit is not None and self.counters.get("frames_in") >= self._frame_limit
+
     def _watch_board(self) -> None:
         """Pipeline thread: a board transition is logged once (WARNING, the journal's level), presence is withdrawn
         when the board is lost (nobody is claimed on a carpet we cannot see), and the info (board_connected) goes to
@@ -305,9 +308,6 @@ class Runtime:
         else:
             log.warning("board %s: frames again after %.1f s without; reported available", where, change.after_s)
         self.publisher.put_info(self.info())
-
-    def _limit_reached(self) -> bool:
-        return self._frame_limit is not None and self.counters.get("frames_in") >= self._frame_limit
 
     def _monitor_loop(self) -> None:
         rt = self.config.runtime
