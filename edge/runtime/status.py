@@ -24,7 +24,6 @@ people in the last frame), and the groups:
 from __future__ import annotations
 
 import json
-import os
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -33,14 +32,14 @@ SCHEMA = "cavatar.status/1"
 
 
 def write_status(path: str | Path, status: dict[str, Any]) -> None:
-    """Write ``status`` to ``path`` atomically (a temporary file beside it, then os.replace)."""
+    """Write ``status`` to ``path`` atomically (edge.atomic: a temporary file beside it, then a rename). Not fsynced:
+    it is rewritten every second, on a tmpfs (/run/cavatar) in the service, and a reader never sees half of it."""
+    from edge.atomic import write_atomic
+
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
-        f.write("\n")
-    os.replace(tmp, p)
+    text = json.dumps(status, indent=1, sort_keys=False, allow_nan=False, default=_jsonable) + "\n"
+    write_atomic(p, text, durable=False)
 
 
 def _jsonable(obj: Any) -> Any:
