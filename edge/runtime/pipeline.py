@@ -31,6 +31,7 @@ from typing import Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, SetupError, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
@@ -77,6 +78,7 @@ class Runtime:
         self._lock = threading.Lock()
         self._stopped = False
         self.board: BoardHealth | None = None  # made at start(): frames arriving or not ([source] board_timeout_s)
+        self.notifier = Notifier.from_environment()  # systemd Type=notify: READY, STATUS, WATCHDOG (no-op elsewhere)
 
     # ------------------------------------------------------------------ setup
     def setup(self) -> None:
@@ -188,6 +190,7 @@ class Runtime:
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
+        self.notifier.ready(f"running: {self.config.source.url.split('?')[0]}")
 
     def request_stop(self) -> None:
         """Ask every thread to finish (safe from a signal handler); :meth:`stop` completes it."""
@@ -204,6 +207,7 @@ class Runtime:
                 return self.snapshot()
             self._stopped = True
         self._stop.set()
+        self.notifier.stopping("stopping: publishing what is queued, closing the sinks")
         if self.state == "running":
             self.state = "stopping"
             self.write_status()
@@ -294,7 +298,9 @@ class Runtime:
     def _watch_board(self) -> None:
         """Pipeline thread: a board transition is logged once (WARNING, the journal's level), presence is withdrawn
         when the board is lost (nobody is claimed on a carpet we cannot see), and the info (board_connected) goes to
-        the sinks at once (MQTT: the retained board topic, Home Assistant's carpet entities' availability)."""
+        the sinks at once (MQTT: the retained board topic, Home Assistant's carpet entities' availability).
+        Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
+        self.notifier.watchdog()
         change = self.board.check(time.monotonic(), self._source_stats())
         if change is None:
             return
@@ -315,6 +321,11 @@ class Runtime:
         while not self._stop.wait(rt.status_s):
             try:
                 self.write_status()
+                if self.notifier.active:  # one line for `systemctl status cavatar`
+                    s = self.snapshot()
+                    health = s["board_health"] or {}
+                    self.notifier.status(f"board lost: {health.get('reason')}" if health.get("connected") is False else
+                                         f"{self._fps:.1f} fps, {s['people']} people, {s['publish']['published']} published")
                 if time.monotonic() >= next_info:
                     next_info += rt.info_s
                     self.publisher.put_info(self.info())
