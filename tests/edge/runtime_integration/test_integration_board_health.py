@@ -74,3 +74,38 @@ def test_unplugged_board_goes_unavailable_and_presence_is_withdrawn(tmp_path, si
     assert len(lost) == 1 and len(back) == 1, warnings
     print(f"\nboard offline on MQTT {offline_after_s:.2f} s after the unplug (timeout {TIMEOUT_S} s); {lost[0]}")
     assert offline_after_s < TIMEOUT_S + 1.5
+
+
+def test_a_board_whose_frames_all_fail_their_crc_is_lost_too_and_says_why(tmp_path, sim_calibration, one_person_frames,
+                                                                         caplog):
+    """Bytes keep arriving but every frame is damaged (a bad cable, interference): the same unavailability, and the
+    reason says it is the checks, not silence."""
+    import threading
+
+    caplog.set_level(logging.WARNING, logger="edge.runtime.pipeline")
+    with PtyBoard(premade_board(one_person_frames)) as pty:
+        base = make_config(tmp_path, sim_calibration, 1, source=f"serial://{pty.port}?baud=2000000").to_dict()
+        base["source"]["board_timeout_s"] = TIMEOUT_S
+        rt = Runtime(RuntimeConfig.from_dict(base), say=lambda text: None)
+        noisy = threading.Event()
+
+        def interference():
+            while noisy.is_set():
+                pty.board.flip_bits(200)
+                time.sleep(0.005)
+
+        try:
+            rt.start()
+            assert wait_until(lambda: rt.snapshot()["frames"]["frames_in"] >= 14, 15)
+            noisy.set()
+            threading.Thread(target=interference, daemon=True).start()
+            assert wait_until(lambda: rt.snapshot()["board_health"]["connected"] is False, TIMEOUT_S + 3)
+            reason = rt.snapshot()["board_health"]["reason"]
+            noisy.clear()
+            assert wait_until(lambda: rt.snapshot()["board_health"]["connected"] is True, 10)
+        finally:
+            noisy.clear()
+            rt.stop()
+    assert "failed their checks" in reason, reason
+    said = [r.getMessage() for r in caplog.records if "reported unavailable" in r.getMessage()]
+    assert len(said) == 1 and "bad CRC" in said[0]
