@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from dataclasses import dataclass
@@ -97,6 +98,14 @@ def _sim_calibration(url: str, out_dir: Path, say: Callable[[str], None]) -> Cho
             say(f"calibration: {path} is for another virtual carpet; calibrating again")
         except CalibrationError as exc:
             say(f"calibration: {path} cannot be used ({exc}); calibrating again")
+    try:  # before the 20-s session, not after it
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not os.access(path.parent, os.W_OK):
+            raise PermissionError("not writable by this user")
+    except OSError as exc:
+        raise SetupError(f"the virtual carpet's calibration is kept beside the status file, but {path.parent} cannot be "
+                         f"written ({exc.strerror or exc}); set [runtime] status_file (--status-file) to a writable place, "
+                         "or pass --calibration FILE") from None
     t0 = time.monotonic()
     cal = run_sim_session(opts["seed"], opts["grid"], opts["bits"], opts["pitch_mm"], path)
     say(f"calibration: no calibration file, so the virtual carpet sim-{opts['seed']} was calibrated as an installer "
