@@ -75,6 +75,10 @@ class BoardHealth:
         """Seconds since the last good frame (or since the start)."""
         return max(0.0, float(now_s) - self.last_frame_s)
 
+    def due(self, now_s: float) -> bool:
+        """A transition is due now (cheap: lets the caller fetch the source's counters only then)."""
+        return (self.age_s(now_s) >= self.timeout_s) == self.connected
+
     def check(self, now_s: float, stats: Mapping[str, Any] | None = None) -> Change | None:
         """The transition due now, once; None when the state holds."""
         age = self.age_s(now_s)

@@ -301,7 +301,10 @@ class Runtime:
         the sinks at once (MQTT: the retained board topic, Home Assistant's carpet entities' availability).
         Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
         self.notifier.watchdog()
-        change = self.board.check(time.monotonic(), self._source_stats())
+        now = time.monotonic()
+        if not self.board.due(now):
+            return
+        change = self.board.check(now, self._source_stats())
         if change is None:
             return
         from edge.sinks import redact

@@ -278,6 +278,8 @@ class MqttSink(Sink):
         return self.config.describe()
 
     def wait_connected(self, timeout_s: float) -> bool:
+        """True once connected and the broker has acknowledged this connection's retained status (so a subscriber
+        that comes after finds it retained)."""
         return self._connected_evt.wait(timeout_s)
 
     @property
@@ -438,6 +440,8 @@ class MqttSink(Sink):
         elif entry.kind == "spool":
             self.counters.delivered(None)
             entry.seg.acked.add(entry.idx)
+        elif entry.kind == "announce" and self._connected:
+            self._connected_evt.set()
         self._acks.notify_all()
 
     # -- spool drain ----------------------------------------------------------------------
@@ -529,7 +533,7 @@ class MqttSink(Sink):
         # Connected before the retained states are sent: a state another thread changes meanwhile is then either
         # read below or sent by that thread itself (it updates the state first, then looks at _connected).
         self._connected = True
-        self._send(self.topics.status, ONLINE if self._online else OFFLINE, 1, True, "status")
+        self._send(self.topics.status, ONLINE if self._online else OFFLINE, 1, True, "announce")  # PUBACK → wait_connected
         if self._info is not None:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
         if self._board is not None:
@@ -539,7 +543,6 @@ class MqttSink(Sink):
             client.subscribe(self.topics.ha_status, qos=1)
         if self._presence is not None:
             self._send(self.topics.presence, dumps(self._presence), 1, True, "presence")
-        self._connected_evt.set()
         self._wake.set()
 
     def _send_discovery(self) -> None:

@@ -13,13 +13,16 @@ def stats(disconnects=0, crc=0, torn=0, decoder=0):
 
 def test_lost_after_the_timeout_once_and_back_at_the_first_frame_once():
     h = BoardHealth(5.0, now_s=100.0)
+    assert not h.due(104.9) and h.due(105.0)
     assert h.connected and h.check(104.9) is None
     change = h.check(105.0)
     assert change is not None and change.state == LOST and change.reason == "no frames for 5 s"
     assert h.check(106.0) is None and h.check(200.0) is None  # said once, however long it lasts
     assert h.as_dict(110.0) == {"connected": False, "state": LOST, "reason": "no frames for 5 s",
                                 "last_frame_age_s": 10.0, "timeout_s": 5.0}
+    assert not h.due(210.0)
     h.frame(210.0)
+    assert h.due(210.0)
     back = h.check(210.0)
     assert back is not None and back.state == CONNECTED and back.after_s == pytest.approx(105.0)
     assert h.check(211.0) is None and h.as_dict(211.0)["reason"] is None

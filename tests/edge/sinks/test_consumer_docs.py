@@ -36,3 +36,10 @@ def test_the_home_assistant_page_names_every_entity_and_label():
         assert f"`{label}`" in HA, label
     for entity in re.findall(r"entity_id: (\S+)", HA):  # the automations use entities that exist
         assert f"`{entity}`" in HA, entity
+
+
+def test_the_discovery_example_in_the_mqtt_page_is_what_is_sent():
+    text = (DOCS / "mqtt.md").read_text()
+    example = json.loads(text.split("Home Assistant discovery (one of eight")[1].split("```json")[1].split("```")[0])
+    sent = dict(DeviceTopics("cavatar", "carpet-01").ha_discovery(sw_version="0.1.0"))
+    assert example == sent["homeassistant/binary_sensor/carpet-01_presence/config"]
