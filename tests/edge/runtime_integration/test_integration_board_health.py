@@ -49,9 +49,10 @@ def test_unplugged_board_goes_unavailable_and_presence_is_withdrawn(tmp_path, si
             assert wait_until(lambda: (presence_count(sub, t.presence) or 0) >= 1, 20), sub.on(t.presence)
             pty.unplug()
             t_unplug = time.monotonic()
-            assert wait_until(lambda: last(sub, t.board) == b"offline", TIMEOUT_S + 2.0), sub.on(t.board)
+            # within the timeout plus the watcher's step (0.2 s) and the trip to the broker; slack for a loaded machine
+            assert wait_until(lambda: last(sub, t.board) == b"offline", TIMEOUT_S + 3.0), sub.on(t.board)
             offline_after_s = time.monotonic() - t_unplug
-            assert wait_until(lambda: presence_count(sub, t.presence) == 0, 2.0), sub.on(t.presence)
+            assert wait_until(lambda: presence_count(sub, t.presence) == 0, 3.0), sub.on(t.presence)
             assert last(sub, t.status) == b"online"  # the runtime itself is fine
             snap = rt.snapshot()
             assert snap["board_health"]["connected"] is False and snap["people"] == 0
@@ -62,8 +63,8 @@ def test_unplugged_board_goes_unavailable_and_presence_is_withdrawn(tmp_path, si
             assert late.wait_for(t.presence, None, 5) and json.loads(late.on(t.presence)[-1][0])["present"] is False
             time.sleep(1.0)
             pty.replug()
-            assert wait_until(lambda: last(sub, t.board) == b"online", 10), sub.on(t.board)
-            assert wait_until(lambda: (presence_count(sub, t.presence) or 0) >= 1, 10), sub.on(t.presence)
+            assert wait_until(lambda: last(sub, t.board) == b"online", 20), sub.on(t.board)
+            assert wait_until(lambda: (presence_count(sub, t.presence) or 0) >= 1, 20), sub.on(t.presence)
         finally:
             final = rt.stop()
     assert final["error"] is None
@@ -73,7 +74,7 @@ def test_unplugged_board_goes_unavailable_and_presence_is_withdrawn(tmp_path, si
     back = [w for w in warnings if "reported available" in w]
     assert len(lost) == 1 and len(back) == 1, warnings
     print(f"\nboard offline on MQTT {offline_after_s:.2f} s after the unplug (timeout {TIMEOUT_S} s); {lost[0]}")
-    assert offline_after_s < TIMEOUT_S + 1.5
+    assert offline_after_s < TIMEOUT_S + 3.0
 
 
 def test_a_board_whose_frames_all_fail_their_crc_is_lost_too_and_says_why(tmp_path, sim_calibration, one_person_frames,
