@@ -156,6 +156,9 @@ class SourceSection:
                            _between(1, 1024))
     missing_rows: str = _f("drop", "a frame with rows lost on the link: 'drop' it, or 'flag' (repair up to 4 rows from "
                                    "the last good frame)", _missing_rows)
+    board_timeout_s: float = _f(5.0, "no good frame from the board for this long → the board is reported unavailable "
+                                     "(MQTT board topic \"offline\", presence withdrawn, one WARNING); the first good "
+                                     "frame after it → available again (one WARNING)", _positive)
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from edge import __version__
+from edge.runtime.board_health import LOST, BoardHealth
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, SetupError, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
@@ -77,6 +79,8 @@ class Runtime:
         self._fps_mark: tuple[float, int] | None = None
         self._lock = threading.Lock()
         self._stopped = False
+        self.board: BoardHealth | None = None  # made at start(): frames arriving or not ([source] board_timeout_s)
+        self.notifier = Notifier.from_environment()  # systemd Type=notify: READY, STATUS, WATCHDOG (no-op elsewhere)
 
     # ------------------------------------------------------------------ setup
     def setup(self) -> None:
@@ -199,6 +203,7 @@ class Runtime:
         if self.state != "ready":
             raise RuntimeError(f"cannot start a runtime that is {self.state}")
         self._started_wall, self._started_mono = self.clock(), time.monotonic()
+        self.board = BoardHealth(self.config.source.board_timeout_s, self._started_mono)
         self.state = "running"
         self.publisher.start()
         self.write_status()
@@ -207,6 +212,7 @@ class Runtime:
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
+        self.notifier.ready(f"running: {self.config.source.url.split('?')[0]}")
 
     def request_stop(self) -> None:
         """Ask every thread to finish (safe from a signal handler); :meth:`stop` completes it."""
@@ -226,6 +232,7 @@ class Runtime:
             self._stopped = True
         deadline = time.monotonic() + timeout_s
         self._stop.set()
+        self.notifier.stopping("stopping: publishing what is queued, closing the sinks")
         if self.state == "running":
             self.state = "stopping"
             self.write_status()
@@ -270,6 +277,8 @@ class Runtime:
                 got = False
                 for frame in src.frames(timeout_s=0.2):
                     got = True
+                    self.board.frame(time.monotonic(), self._source_stats())
+                    self._watch_board()
                     temperature = None
                     if getattr(src, "last_status", None) is not last_status:
                         last_status = src.last_status
@@ -294,6 +303,7 @@ class Runtime:
                         self._stop.set()
                     if self._stop.is_set():
                         break
+                self._watch_board()
                 if deadline is not None and time.monotonic() >= deadline:
                     self.end_reason = f"ran {seconds:g} s"
                     break
@@ -323,12 +333,40 @@ class Runtime:
     def _limit_reached(self) -> bool:
         return self._frame_limit is not None and self.counters.get("frames_in") >= self._frame_limit
 
+    def _watch_board(self) -> None:
+        """Pipeline thread: a board transition is logged once (WARNING, the journal's level), presence is withdrawn
+        when the board is lost (nobody is claimed on a carpet we cannot see), and the info (board_connected) goes to
+        the sinks at once (MQTT: the retained board topic, Home Assistant's carpet entities' availability).
+        Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
+        self.notifier.watchdog()
+        now = time.monotonic()
+        if not self.board.due(now):
+            return
+        change = self.board.check(now, self._source_stats())
+        if change is None:
+            return
+        from edge.sinks import redact
+
+        where = redact(self.config.source.url)
+        if change.state == LOST:
+            log.warning("board %s: %s; reported unavailable (presence withdrawn) until frames arrive again",
+                        where, change.reason)
+            self.publisher.put_presence(0, [])
+        else:
+            log.warning("board %s: frames again after %.1f s without; reported available", where, change.after_s)
+        self.publisher.put_info(self.info())
+
     def _monitor_loop(self) -> None:
         rt = self.config.runtime
         next_info = time.monotonic() + rt.info_s
         while not self._stop.wait(rt.status_s):
             try:
                 self.write_status()
+                if self.notifier.active:  # one line for `systemctl status cavatar`
+                    s = self.snapshot()
+                    health = s["board_health"] or {}
+                    self.notifier.status(f"board lost: {health.get('reason')}" if health.get("connected") is False else
+                                         f"{self._fps:.1f} fps, {s['people']} people, {s['publish']['published']} published")
                 if time.monotonic() >= next_info:
                     next_info += rt.info_s
                     self.publisher.put_info(self.info())
@@ -384,6 +422,8 @@ class Runtime:
         publish["queued"] = self.publisher.queued() if self.publisher else 0
         publish["last_seq"] = self.publisher.last_seq if self.publisher else None
         uptime = time.monotonic() - self._started_mono if self._started_mono else 0.0
+        board_health = self.board.as_dict(time.monotonic()) if self.board is not None else None
+        board_lost = board_health is not None and not board_health["connected"]
         publish["sinks"] = {}
         for sink in self.sinks or []:
             try:
@@ -396,7 +436,8 @@ class Runtime:
             "started": self._started_wall, "updated": now,
             "uptime_s": round(uptime, 3), "fps": round(self._fps, 2),
             "fps_mean": round(c.get("frames_in", 0) / uptime, 2) if uptime > 0 else 0.0,
-            "people": self.stages.people_now if self.stages else 0,
+            "people": self.stages.people_now if self.stages and not board_lost else 0,
+            "board_health": board_health,
             "source": {"url": redact(self.config.source.url), "board": board, "queue": src_queue,
                        "decoder": st.get("decoder", {}), "assembly": st.get("frames", {}),
                        "board_status": st.get("board_status", {}), "board_mismatch": st.get("board_mismatch")},
@@ -452,11 +493,14 @@ class Runtime:
             "body_model": s["model"].get("body_model"), "board_device_id": board.get("device_id"),
             "firmware": board.get("firmware"), "protocol_version": board.get("protocol_version"),
             "grid": [board.get("rows"), board.get("cols")] if board else None, "rate_hz": board.get("rate_hz"),
+            "board_connected": None if s["board_health"] is None else s["board_health"]["connected"],
+            "activities": list(self.bundle.activities) if self.bundle is not None else None,
             "calibration": {"sha256": cal.get("sha256"), "created": cal.get("created"), "age_days": cal.get("age_days"),
                             "max_age_days": cal.get("max_age_days"), "due": cal.get("due"), "automatic": cal.get("automatic")},
             "started": s["started"], "uptime_s": s["uptime_s"],
             "health": {
                 "fps": s["fps"], "people": s["people"], "frames_in": fr["frames_in"],
+                "last_frame_age_s": None if s["board_health"] is None else s["board_health"]["last_frame_age_s"],
                 "frames_dropped": s["source"]["queue"].get("dropped_slow_consumer", 0),
                 "frames_lost_on_link": asm.get("crc_mismatch", 0) + asm.get("torn_dropped", 0) + asm.get("missed_frames", 0),
                 "decoder_dropped": decoder_dropped, "frames_invalid": fr["frames_invalid"],

@@ -25,7 +25,6 @@ people in the last frame), and the groups:
 from __future__ import annotations
 
 import json
-import os
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -34,18 +33,14 @@ SCHEMA = "cavatar.status/1"
 
 
 def write_status(path: str | Path, status: dict[str, Any]) -> None:
-    """Write ``status`` to ``path`` atomically (a temporary file beside it, then os.replace)."""
+    """Write ``status`` to ``path`` atomically (edge.atomic: a temporary file beside it, then a rename). Not fsynced:
+    it is rewritten every second, on a tmpfs (/run/cavatar) in the service, and a reader never sees half of it."""
+    from edge.atomic import write_atomic
+
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
-            f.write("\n")
-        os.replace(tmp, p)
-    except BaseException:  # a full folder: the temporary file does not stay behind
-        tmp.unlink(missing_ok=True)
-        raise
+    text = json.dumps(status, indent=1, sort_keys=False, allow_nan=False, default=_jsonable) + "\n"
+    write_atomic(p, text, durable=False)
 
 
 def _jsonable(obj: Any) -> Any:
@@ -91,6 +86,15 @@ def _when(t: float | None) -> str:
     return datetime.fromtimestamp(t, timezone.utc).astimezone().strftime("%Y-%m-%d %H:%M:%S")
 
 
+def _board_line(health: dict[str, Any] | None) -> str:
+    if not health:
+        return "  board health: -"
+    if health.get("connected"):
+        return f"  board health: connected (last frame {health.get('last_frame_age_s', 0):.1f} s ago)"
+    return (f"  board health: LOST, reported unavailable — {health.get('reason') or 'no frames'} "
+            f"(last frame {health.get('last_frame_age_s', 0):.0f} s ago; limit {health.get('timeout_s')} s)")
+
+
 def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
     """A readable multi-line report of a status dict (what `cavatar status` prints)."""
     import time
@@ -115,6 +119,7 @@ def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
         f"  {s.get('fps', 0):.1f} fps now, {s.get('fps_mean', 0):.1f} on average; dropped for a slow pipeline "
         f"{q.get('dropped_slow_consumer', 0)}, "
         f"reconnects {q.get('reconnects', 0)}, stalls {q.get('stalls', 0)}",
+        _board_line(s.get("board_health")),
         f"  decoder: {dec.get('packets', 0)} packets, dropped {dec.get('dropped_total', 0)}{_reasons(dec.get('dropped'))}, "
         f"missed {dec.get('missed', 0)}; frames: crc mismatch {asm.get('crc_mismatch', 0)}, "
         f"torn {asm.get('torn_dropped', 0)}, missed {asm.get('missed_frames', 0)}, duplicate {asm.get('duplicate_frames', 0)}",
