@@ -1,32 +1,50 @@
-"""Grouping contacts into people.
+"""Grouping contacts into people: what one body can reach, and what it weighs.
 
-A person is one or more contacts (feet, hands, knees). Distance alone cannot split two
-people standing close (their inner feet can be nearer than one person's two feet in a
-long step), so grouping combines distance with what the tracker already knows:
+A person is one or more contacts (feet, hands, knees, buttocks, a whole lying body). Distance
+alone cannot tell one person's contacts from two people's: a lunge puts one person's feet
+0.7 m apart and a push-up their hands and feet 1.3 m apart, while two people standing side by
+side have feet 0.3 m apart. So grouping uses what each track already is:
 
-1. distance: contacts whose centres are within ``group_radius_m`` of each other
-   (transitively: single linkage, ``scipy.sparse.csgraph.connected_components``) form a
-   cluster;
-2. prior: a contact that overlaps the sensels a track owned in the previous frame
-   belongs to that track (majority of overlapping sensels; a stance foot does not move),
-   provided it lies within ``attach_radius_m`` of the track's predicted centre (someone
-   stepping onto a footprint another person just left must not inherit them);
-3. a cluster whose contacts carry priors of two or more tracks is split between them:
-   contacts without a prior go to the nearest of those tracks' predicted centres;
-   a cluster with one track's priors is that track; one with none is new (key 0);
-4. a track whose priors fall in several clusters keeps the cluster nearest its
-   prediction; the others are new (people who were merged, walking apart).
-
-New groups (key 0) are matched to the remaining tracks by the tracker (Hungarian on
-distance with a gate), or start new tracks.
+1. prior: a contact that overlaps the sensels a track owned in the previous frame stays with
+   that track (majority of overlapping sensels: a stance foot does not move), provided it lies
+   within the track's reach;
+2. reach: the other contacts are clustered (all within ``group_radius_m`` of each other) and the
+   clusters are given to tracks by the Hungarian assignment (``linear_sum_assignment``) on the
+   distance to each track's predicted centre divided by its reach; a cluster within reach of a
+   track that another cluster took joins the nearest track in reach too (two hands landing at
+   once). A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts from
+   its centre (slowly forgotten), so a lying body reaches farther than a standing one;
+3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
+   ``split_distance_m`` apart (two people who were one track walking apart), or a track
+   carrying more than its own weight by ``min_person_force_n`` with a part that carries the
+   excess (someone stepping in beside it: a foot that lifts and lands moves weight, it
+   does not add any);
+4. clusters nobody reaches are new (key 0): the tracker matches them to coasting tracks or
+   starts new ones.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial.distance import cdist
+from scipy.spatial.distance import cdist, pdist
+
+
+@dataclass(frozen=True, slots=True)
+class Body:
+    """What grouping needs to know of one track: predicted centre (2,) m, reach m, weight N
+    (None until known), and for how many frames each kind of split has been seen."""
+
+    centre_m: np.ndarray
+    reach_m: float
+    weight_n: float | None = None
+    far_frames: int = 0
+    heavy_frames: int = 0
 
 
 def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -> np.ndarray:
@@ -51,6 +69,17 @@ def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -
     return out
 
 
+def within_span(centres_m: np.ndarray, span_m: float) -> np.ndarray:
+    """(n, 2) points → (n,) cluster index: complete linkage, every two points of a cluster within span_m.
+
+    Unlike single linkage this does not chain two people standing side by side (each one's feet
+    0.2 m apart, the nearest feet of the two 0.3 m apart) into one.
+    """
+    if len(centres_m) <= 1:
+        return np.zeros(len(centres_m), dtype=np.int64)
+    return fcluster(linkage(pdist(centres_m), method="complete"), t=span_m, criterion="distance") - 1
+
+
 def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
     """(n, 2) points → (n,) cluster index; points within radius_m (transitively) share one."""
     if len(centres_m) <= 1:
@@ -60,44 +89,111 @@ def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
     return comp
 
 
+@dataclass(frozen=True, slots=True)
+class Grouping:
+    """groups: [(blob indices, track key or 0 for new)]; far, heavy: keys whose split evidence grew this frame."""
+
+    groups: list[tuple[np.ndarray, int]]
+    far: frozenset[int]
+    heavy: frozenset[int]
+
+
 def group_blobs(
     centres_m: np.ndarray,
+    forces_n: np.ndarray,
     priors: np.ndarray,
-    predicted_m: dict[int, np.ndarray],
+    bodies: dict[int, Body],
     group_radius_m: float,
-    attach_radius_m: float,
-) -> list[tuple[np.ndarray, int]]:
-    """Blob centres (n, 2), prior keys (n,) and track predictions {key: (2,)} → [(blob indices, key or 0)]."""
+    split_distance_m: float,
+    min_person_force_n: float,
+    split_frames: int,
+) -> Grouping:
+    """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs."""
     n = len(centres_m)
     if n == 0:
-        return []
-    prior = np.zeros(n, dtype=np.int64)
+        return Grouping([], frozenset(), frozenset())
+    owner = np.zeros(n, dtype=np.int64)
     for i in range(n):
         k = int(priors[i])
-        if k in predicted_m and np.linalg.norm(centres_m[i] - predicted_m[k]) <= attach_radius_m:
-            prior[i] = k
-    cluster = single_linkage(centres_m, group_radius_m)
+        if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
+            owner[i] = k
+    _reach(centres_m, owner, bodies, group_radius_m)
     groups: list[tuple[np.ndarray, int]] = []
-    claims: dict[int, list[int]] = {}  # key -> indices into groups
-    for c in np.unique(cluster):
-        idx = np.nonzero(cluster == c)[0]
-        keys = [int(k) for k in np.unique(prior[idx]) if k > 0]
-        if len(keys) <= 1:
-            parts = [(idx, keys[0] if keys else 0)]
-        else:
-            pred = np.array([predicted_m[k] for k in keys])
-            owner = np.array(keys)[cdist(centres_m[idx], pred).argmin(axis=1)]
-            owner = np.where(prior[idx] > 0, prior[idx], owner)
-            parts = [(idx[owner == k], k) for k in keys]
-        for part in parts:
-            if part[1]:
-                claims.setdefault(part[1], []).append(len(groups))
-            groups.append(part)
-    for k, gi in claims.items():
-        if len(gi) > 1:  # one track's contacts in several clusters: the nearest keeps it
-            dist = [np.linalg.norm(centres_m[groups[g][0]].mean(axis=0) - predicted_m[k]) for g in gi]
-            keep = gi[int(np.argmin(dist))]
-            for g in gi:
-                if g != keep:
-                    groups[g] = (groups[g][0], 0)
-    return groups
+    far, heavy = set(), set()
+    for k in np.unique(owner[owner > 0]):
+        k = int(k)
+        idx = np.flatnonzero(owner == k)
+        parts = _split_far(centres_m[idx], forces_n[idx], split_distance_m)
+        if parts is not None:
+            far.add(k)
+            if bodies[k].far_frames + 1 >= split_frames:
+                keep, rest = parts
+                groups += [(idx[keep], k), (idx[rest], 0)]
+                continue
+        part = _split_heavy(centres_m[idx], forces_n[idx], bodies[k], group_radius_m, min_person_force_n)
+        if part is not None:
+            heavy.add(k)
+            if bodies[k].heavy_frames + 1 >= split_frames:
+                groups += [(idx[~part], k), (idx[part], 0)]
+                continue
+        groups.append((idx, k))
+    new = np.flatnonzero(owner == 0)
+    if len(new):
+        cluster = within_span(centres_m[new], group_radius_m)
+        groups += [(new[cluster == c], 0) for c in np.unique(cluster)]
+    return Grouping(groups, frozenset(far), frozenset(heavy))
+
+
+def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body], group_radius_m: float) -> None:
+    """Give clusters of unowned blobs to the tracks that reach them (in place on ``owner``)."""
+    free = np.flatnonzero(owner == 0)
+    if len(free) == 0 or not bodies:
+        return
+    keys = list(bodies)
+    cluster = within_span(centres_m[free], group_radius_m)
+    members = [free[cluster == c] for c in np.unique(cluster)]
+    pred = np.array([bodies[k].centre_m for k in keys])
+    reach = np.array([bodies[k].reach_m for k in keys])
+    # a cluster's distance to a body: its nearest blob to the body's centre, in units of the body's reach
+    d = np.stack([cdist(centres_m[m], pred).min(axis=0) for m in members]) / reach
+    rows, cols = linear_sum_assignment(np.where(d <= 1.0, d, 1e6))
+    taken = set()
+    for r, c in zip(rows, cols):
+        if d[r, c] <= 1.0:
+            owner[members[r]] = keys[c]
+            taken.add(r)
+    for r in range(len(members)):
+        if r not in taken and d[r].min() <= 1.0:
+            owner[members[r]] = keys[int(np.argmin(d[r]))]
+
+
+def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(keep, rest) bool masks when the contacts fall in parts more than split_distance_m apart (the heaviest part keeps)."""
+    if len(centres_m) < 2:
+        return None
+    comp = single_linkage(centres_m, split_distance_m)
+    if comp.max() == 0:
+        return None
+    heaviest = int(np.argmax(np.bincount(comp, weights=forces_n)))
+    return comp == heaviest, comp != heaviest
+
+
+def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, body: Body, group_radius_m: float,
+                 min_person_force_n: float) -> np.ndarray | None:
+    """Mask of the part that carries a track's excess weight (a person stepping in beside it), or None."""
+    if body.weight_n is None or len(centres_m) < 2:
+        return None
+    total = float(forces_n.sum())
+    excess = total - body.weight_n
+    if excess < min_person_force_n:
+        return None
+    comp = single_linkage(centres_m, group_radius_m)
+    if comp.max() == 0:
+        return None
+    part_force = np.bincount(comp, weights=forces_n)
+    heaviest = int(np.argmax(part_force))
+    candidates = [c for c in range(len(part_force)) if c != heaviest and part_force[c] >= min_person_force_n]
+    if not candidates:
+        return None
+    best = min(candidates, key=lambda c: abs(part_force[c] - excess))
+    return comp == best

@@ -86,6 +86,7 @@ class SceneTracker:
         self._noise_fixed = cfg.noise_kpa is not None
         self._noise_t_s: float | None = None
         self._last_t_s: float | None = None
+        self._dt_s = 1.0 / 14.0  # the frame interval, followed as frames come (sets split_s in frames)
         self._prev_keys: np.ndarray | None = None
         self.counters: dict[str, int] = {"frames": 0, "valid": 0, "empty": 0, "still": 0,
                                          **{f"rejected_{r}": 0 for r in REASONS}}
@@ -136,6 +137,8 @@ class SceneTracker:
             return SceneFrame(float(t_s) if isinstance(t_s, (int, float)) else float("nan"), False, reason, [], False, False,
                               noise_now, None, dict(c))
         t_s = float(t_s)
+        if self._last_t_s is not None and 0.0 < t_s - self._last_t_s < 1.0:
+            self._dt_s += 0.1 * (t_s - self._last_t_s - self._dt_s)
         self._last_t_s = t_s
         c["valid"] += 1
         t1 = time.perf_counter()
@@ -171,8 +174,12 @@ class SceneTracker:
             self._prev_keys = None
             return []
         centres = np.array([b.cop_m for b in blobs])
+        forces = np.array([b.force_n for b in blobs])
         priors = prior_keys(labels, len(blobs), self._prev_keys)
-        groups = group_blobs(centres, priors, self.people.predictions(t_s), cfg.group_radius_m, cfg.attach_radius_m)
+        split_frames = max(1, int(round(cfg.split_s / self._dt_s)))
+        grouping = group_blobs(centres, forces, priors, self.people.bodies(t_s), cfg.group_radius_m, cfg.split_distance_m,
+                               cfg.min_person_force_n, split_frames)
+        groups = grouping.groups
         lut = np.zeros(len(blobs) + 1, dtype=np.int32)
         for g, (idx, _) in enumerate(groups):
             lut[idx + 1] = g + 1
@@ -195,6 +202,11 @@ class SceneTracker:
             obs.append(Observation(cop_m=cop, force_n=total * sensel_m2 * 1e3))
             masks.append(mask)
         tracks = self.people.step(obs, [k for _, k in groups], t_s)
+        for (idx, key), tr, o in zip(groups, tracks, obs):
+            if tr is not None:
+                extent = float(np.max(np.linalg.norm(centres[idx] - o.cop_m, axis=1)))
+                self.people.observe_body(tr, extent, float(forces[idx].sum()), tr.key in grouping.far,
+                                         tr.key in grouping.heavy, self._dt_s)
         keys = np.zeros(len(groups) + 1, dtype=np.int32)
         for g, tr in enumerate(tracks):
             keys[g + 1] = 0 if tr is None else tr.key

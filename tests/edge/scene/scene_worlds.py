@@ -62,3 +62,30 @@ def footstep_scene(people: int, seed: int, frames: int, sigma_kpa: float = 0.05,
         carpet(i)
         truth = {k: w.pos_m.copy() for k, w in enumerate(carpet._walkers)}
         yield i * carpet.dt_s, noisy(carpet.pressure_kpa().astype(np.float32), rng, sigma_kpa, salt), truth
+
+
+def render_pads(rows: int, cols: int, pitch_m: float, pads: list[tuple[float, float, float, float, float]]) -> np.ndarray:
+    """pads: (x_m, y_m, half_length_m along x, half_width_m along y, force_n) ellipses of uniform pressure
+    (a foot, a hand, a knee, buttocks, shoulder blades), box-averaged over each sensel → kPa (rows, cols)."""
+    s = max(1, int(round(pitch_m / 0.004)))
+    fine = pitch_m / s
+    ys, xs = np.mgrid[0 : rows * s, 0 : cols * s]
+    xs = (xs + 0.5) * fine
+    ys = (ys + 0.5) * fine
+    p = np.zeros((rows * s, cols * s))
+    for x, y, a, b, force_n in pads:
+        if force_n <= 0:
+            continue
+        inside = ((xs - x) / a) ** 2 + ((ys - y) / b) ** 2 <= 1.0
+        p[inside] += force_n / (np.pi * a * b) / 1e3
+    return p.reshape(rows, s, cols, s).mean(axis=(1, 3)).astype(np.float32)
+
+
+def foot(x_m: float, y_m: float, force_n: float) -> tuple[float, float, float, float, float]:
+    """A foot along x (25 × 9 cm)."""
+    return (x_m, y_m, FOOT_A_M, FOOT_B_M, force_n)
+
+
+def pad(x_m: float, y_m: float, diameter_m: float, force_n: float) -> tuple[float, float, float, float, float]:
+    """A round contact: a hand (~0.1 m), a knee (~0.08 m), buttocks (~0.25 m)."""
+    return (x_m, y_m, diameter_m / 2, diameter_m / 2, force_n)

@@ -1,0 +1,127 @@
+"""One body is one track: scripted contacts of one person (lunge, push-up, sit-up, lying, a foot
+lifting and landing) stay one track; two people side by side stay two; someone stepping in is new.
+
+Each scene is a list of frames, each frame the contacts (feet, knees, hands, buttocks, shoulders)
+with the force they carry; a person's force moves between their contacts as it would (weight
+shifts before a foot lifts), so the total stays their weight.
+"""
+
+import numpy as np
+from scene_worlds import foot, noisy, pad, render_pads
+
+from edge.scene import SceneConfig, SceneTracker
+
+PITCH = 0.01905
+W = 70 * 9.81  # one person's weight, N
+FPS = 14
+
+
+def ramp(a: float, b: float, n: int) -> list[float]:
+    """n values from a to b (both ends included when n > 1)."""
+    return list(np.linspace(a, b, n)) if n > 1 else [b]
+
+
+def run(frames: list[list[tuple]], seed: int = 0) -> tuple[list[dict[int, np.ndarray]], SceneTracker]:
+    st = SceneTracker(96, 96, PITCH, SceneConfig(noise_kpa=0.05))
+    rng = np.random.default_rng(seed)
+    log = []
+    for i, pads in enumerate(frames):
+        out = st.update(noisy(render_pads(96, 96, PITCH, pads), rng, salt=2), i / FPS)
+        log.append({q.track_id: q.cop_m for q in out.people})
+    return log, st
+
+
+def assert_one_track(log, st, settle: int = 3):
+    ids = [tuple(sorted(people)) for people in log[settle:]]
+    assert all(len(i) == 1 for i in ids), [(f + settle, i) for f, i in enumerate(ids) if len(i) != 1][:5]
+    assert len(set(ids)) == 1
+    assert st.counters["tracks_born"] == 1
+
+
+def test_lunge_feet_a_stride_apart_stay_one_track():
+    y_l, y_r = 0.81, 0.99
+    frames = [[foot(0.5, y_l, W / 2), foot(0.5, y_r, W / 2)]] * 14
+    frames += [[foot(0.5, y_l, W - f), foot(0.5, y_r, f)] for f in ramp(W / 2, 0, 4)]  # weight onto the left foot
+    frames += [[foot(0.5, y_l, W)]] * 3  # right foot in the air
+    frames += [[foot(0.5, y_l, W - f), foot(1.2, y_r, f)] for f in ramp(0.1 * W, W / 2, 5)]  # lands 0.7 m ahead
+    for i in range(30):  # the lunge: the knee bobs, weight moves between the feet
+        f = W / 2 + 0.15 * W * np.sin(i / 3)
+        frames.append([foot(0.5, y_l, W - f), foot(1.2, y_r, f)])
+    frames += [[foot(0.5, y_l, W - f), foot(1.2, y_r, f)] for f in ramp(W / 2, W, 4)]  # onto the front foot
+    frames += [[foot(1.2, y_r, W)]] * 3
+    frames += [[foot(1.2, y_l, f), foot(1.2, y_r, W - f)] for f in ramp(0.1 * W, W / 2, 4)]  # rear foot joins it
+    frames += [[foot(1.2, y_l, W / 2), foot(1.2, y_r, W / 2)]] * 8
+    log, st = run(frames)
+    assert_one_track(log, st)
+
+
+def _kneel_to_push_up() -> list[list[tuple]]:
+    feet_x, knee_x, hand_x = 0.45, 0.9, 1.45
+    frames = [[foot(feet_x, 0.81, W / 2), foot(feet_x, 0.99, W / 2)]] * 10
+    for f in ramp(0.1, 0.7, 5):  # kneel: the knees land 0.45 m ahead and take the weight
+        frames.append([foot(feet_x, 0.81, (1 - f) * W / 2), foot(feet_x, 0.99, (1 - f) * W / 2),
+                       pad(knee_x, 0.83, 0.09, f * W / 2), pad(knee_x, 0.97, 0.09, f * W / 2)])
+    for f in ramp(0.1, 0.5, 5):  # hands down 0.55 m ahead of the knees
+        rest = (1 - f) * W
+        frames.append([foot(feet_x, 0.81, 0.15 * rest), foot(feet_x, 0.99, 0.15 * rest), pad(knee_x, 0.83, 0.09, 0.35 * rest),
+                       pad(knee_x, 0.97, 0.09, 0.35 * rest), pad(hand_x, 0.72, 0.1, f * W / 2), pad(hand_x, 1.08, 0.1, f * W / 2)])
+    for i in range(6):  # knees lift, the feet slide back to a plank: hands 1.3 m from the feet
+        x = feet_x - 0.05 * i
+        frames.append([foot(x, 0.81, 0.18 * W), foot(x, 0.99, 0.18 * W), pad(hand_x, 0.72, 0.1, 0.32 * W),
+                       pad(hand_x, 1.08, 0.1, 0.32 * W)])
+    return frames
+
+
+def test_push_up_hands_and_feet_stay_one_track():
+    frames = _kneel_to_push_up()
+    x = 0.45 - 0.25
+    for i in range(40):  # push-ups: weight moves between hands and feet
+        h = 0.64 + 0.08 * np.sin(i / 2.5)
+        frames.append([foot(x, 0.81, (1 - h) / 2 * W), foot(x, 0.99, (1 - h) / 2 * W), pad(1.45, 0.72, 0.1, h / 2 * W),
+                       pad(1.45, 1.08, 0.1, h / 2 * W)])
+    log, st = run(frames)
+    assert_one_track(log, st)
+
+
+def test_sit_up_buttocks_feet_and_back_stay_one_track():
+    def sitting(lean: float) -> list[tuple]:  # lean 0: sitting up, 1: lying back
+        return [pad(0.8, 0.9, 0.28, (0.6 - 0.2 * lean) * W), foot(1.35, 0.81, (0.2 - 0.1 * lean) * W),
+                foot(1.35, 0.99, (0.2 - 0.1 * lean) * W), (0.35, 0.9, 0.1, 0.18, 0.35 * lean * W),
+                pad(0.12, 0.9, 0.12, 0.05 * lean * W)]
+    frames = [sitting(0.0)] * 10
+    for _ in range(3):  # lie back, sit up again
+        frames += [sitting(v) for v in ramp(0, 1, 8)] + [sitting(1.0)] * 6 + [sitting(v) for v in ramp(1, 0, 8)]
+    log, st = run(frames)
+    assert_one_track(log, st)
+
+
+def test_a_foot_lifting_and_landing_is_not_a_new_person():
+    frames = [[foot(0.9, 0.81, W / 2), foot(0.9, 0.99, W / 2)]] * 8
+    x_l = 0.9
+    for step in range(4):  # the left foot lifts, stays up 5 frames, lands 0.3 m farther each time
+        frames += [[foot(x_l, 0.81, f), foot(0.9, 0.99, W - f)] for f in ramp(W / 2, 0, 3)]
+        frames += [[foot(0.9, 0.99, W)]] * 5
+        x_l = 0.9 + 0.3 * ((step % 2) * -2 + 1)
+        frames += [[foot(x_l, 0.81, f), foot(0.9, 0.99, W - f)] for f in ramp(0.05 * W, W / 2, 4)]
+    log, st = run(frames)
+    assert_one_track(log, st)
+
+
+def _side_by_side(y_a: float, y_b: float, frames_n: int = 60) -> list[list[tuple]]:
+    """Two people stepping in place, out of phase, their feet ±9 cm about y_a and y_b."""
+    frames = []
+    for i in range(frames_n):
+        fa = W / 2 * (1 + 0.9 * np.sin(2 * np.pi * i / 14))  # one foot nearly unloaded at each turn
+        fb = W / 2 * (1 + 0.9 * np.sin(2 * np.pi * i / 11 + 1.0))
+        frames.append([foot(0.9, y_a - 0.09, fa), foot(0.9, y_a + 0.09, W - fa),
+                       foot(0.95, y_b - 0.09, fb), foot(0.95, y_b + 0.09, W - fb)])
+    return frames
+
+
+def test_two_people_side_by_side_30cm_apart_stay_two():
+    # centres 0.48 m apart: the nearest feet of the two are 0.30 m apart (centre to centre)
+    log, st = run(_side_by_side(0.66, 1.14))
+    ids = [tuple(sorted(p)) for p in log[3:]]
+    assert all(len(i) == 2 for i in ids) and len(set(ids)) == 1
+    a, b = sorted(log[-1].values(), key=lambda c: c[1])
+    assert abs(a[1] - 0.66) < 0.1 and abs(b[1] - 1.14) < 0.1
