@@ -107,8 +107,16 @@ def group_blobs(
     split_distance_m: float,
     min_person_force_n: float,
     split_frames: int,
+    ages_s: np.ndarray | None = None,
+    newcomer_s: float = 0.5,
+    frame_s: float = 1 / 14,
 ) -> Grouping:
-    """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs."""
+    """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs.
+
+    ages_s: (n,) how long each blob has been with its prior track (0 for new contacts); only
+    contacts that joined a track at most newcomer_s before it began to carry more than its weight
+    can be split off as someone stepping in (frame_s: the frame interval, to count back).
+    """
     n = len(centres_m)
     if n == 0:
         return Grouping([], frozenset(), frozenset())
@@ -118,6 +126,7 @@ def group_blobs(
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
     _reach(centres_m, owner, bodies, group_radius_m)
+    ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
     far, heavy = set(), set()
     for k in np.unique(owner[owner > 0]):
@@ -130,7 +139,8 @@ def group_blobs(
                 keep, rest = parts
                 groups += [(idx[keep], k), (idx[rest], 0)]
                 continue
-        part = _split_heavy(centres_m[idx], forces_n[idx], bodies[k], group_radius_m, min_person_force_n)
+        recent = ages[idx] <= newcomer_s + bodies[k].heavy_frames * frame_s
+        part = _split_heavy(centres_m[idx], forces_n[idx], recent, bodies[k], group_radius_m, min_person_force_n)
         if part is not None:
             heavy.add(k)
             if bodies[k].heavy_frames + 1 >= split_frames:
@@ -178,22 +188,28 @@ def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: fl
     return comp == heaviest, comp != heaviest
 
 
-def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, body: Body, group_radius_m: float,
+def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray, body: Body, group_radius_m: float,
                  min_person_force_n: float) -> np.ndarray | None:
-    """Mask of the part that carries a track's excess weight (a person stepping in beside it), or None."""
-    if body.weight_n is None or len(centres_m) < 2:
+    """Mask of the recently joined contacts that carry a track's excess weight (someone stepping in beside it), or None.
+
+    recent: (n,) bool, contacts that joined the track lately. They are clustered (all within
+    group_radius_m of each other); the cluster whose force is nearest the excess is the
+    newcomer, provided it and what remains each carry at least min_person_force_n.
+    """
+    if body.weight_n is None or len(centres_m) < 2 or not recent.any():
         return None
     total = float(forces_n.sum())
     excess = total - body.weight_n
     if excess < min_person_force_n:
         return None
-    comp = single_linkage(centres_m, group_radius_m)
-    if comp.max() == 0:
+    idx = np.flatnonzero(recent)
+    comp = within_span(centres_m[idx], group_radius_m)
+    part_force = np.bincount(comp, weights=forces_n[idx])
+    ok = [c for c in range(len(part_force))
+          if part_force[c] >= min_person_force_n and total - part_force[c] >= min_person_force_n]
+    if not ok:
         return None
-    part_force = np.bincount(comp, weights=forces_n)
-    heaviest = int(np.argmax(part_force))
-    candidates = [c for c in range(len(part_force)) if c != heaviest and part_force[c] >= min_person_force_n]
-    if not candidates:
-        return None
-    best = min(candidates, key=lambda c: abs(part_force[c] - excess))
-    return comp == best
+    best = min(ok, key=lambda c: abs(part_force[c] - excess))
+    part = np.zeros(len(centres_m), dtype=bool)
+    part[idx[comp == best]] = True
+    return part

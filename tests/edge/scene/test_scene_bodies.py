@@ -125,3 +125,29 @@ def test_two_people_side_by_side_30cm_apart_stay_two():
     assert all(len(i) == 2 for i in ids) and len(set(ids)) == 1
     a, b = sorted(log[-1].values(), key=lambda c: c[1])
     assert abs(a[1] - 0.66) < 0.1 and abs(b[1] - 1.14) < 0.1
+def test_lying_down_and_moving_the_legs_stays_one_track():
+    def body(back: float, legs: float) -> list[tuple]:
+        """back 0: sitting with knees up, 1: lying; legs 0: raised, 1: on the carpet (heels 0.75 m from the buttocks)."""
+        heel_x = 1.35 + 0.25 * back
+        return [pad(0.15, 0.9, 0.12, 0.08 * back * W), (0.42, 0.9, 0.1, 0.18, 0.3 * back * W),
+                pad(0.85, 0.9, 0.28, (0.6 - 0.2 * back + 0.2 * (1 - legs)) * W),
+                (heel_x, 0.84, 0.05, 0.04, (0.2 - 0.1 * back) * legs * W), (heel_x, 0.96, 0.05, 0.04, (0.2 - 0.1 * back) * legs * W)]
+    frames = [body(0.0, 1.0)] * 10 + [body(v, 1.0) for v in ramp(0, 1, 10)] + [body(1.0, 1.0)] * 10
+    for _ in range(2):  # legs raised and lowered
+        frames += [body(1.0, v) for v in ramp(1, 0, 5)] + [body(1.0, 0.0)] * 8 + [body(1.0, v) for v in ramp(0, 1, 5)]
+    log, st = run(frames)
+    assert_one_track(log, st)
+
+
+def test_a_person_stepping_in_beside_another_is_new():
+    stand = [foot(0.9, 0.81, W / 2), foot(0.9, 0.99, W / 2)]
+    frames = [stand] * 15
+    y = 1.45  # the newcomer comes in from the top edge, first foot landing 0.46 m from the other's nearest foot
+    frames += [stand + [foot(1.0, y, f)] for f in ramp(0.1 * W, W, 4)]
+    frames += [stand + [foot(1.0, y, W - f), foot(0.8, y - 0.1, f)] for f in ramp(0.1 * W, W / 2, 4)]
+    frames += [stand + [foot(1.0, y, W / 2), foot(0.8, y - 0.1, W / 2)]] * 25
+    log, st = run(frames)
+    first = set(log[10])
+    assert len(first) == 1
+    assert all(first <= set(p) and len(p) <= 2 for p in log[10:])  # the first keeps their id; never a third
+    assert all(len(p) == 2 for p in log[15 + 16:])  # the newcomer has an id of their own within 16 frames (1.1 s)
