@@ -3,8 +3,10 @@ simulator's per-person truth. Writes bench/results/scene_quality.json.
 
     OMP_NUM_THREADS=1 python bench/scene_quality.py [--quick] [--cache DIR]
 
-Scenes: every activity alone (6 s each), 2 and 3 people doing upright activities side by side
-(8 s each), placed by the simulator (``sim.dataset.generate.place_scene``). Each frame: every
+Scenes: every activity alone (6 s each, two seeds), 2 and 3 people doing upright activities side by
+side (8 s each), placed by the simulator (``sim.dataset.generate.place_scene``), and 30 s of
+``sim://?people=N&seed=S``'s own stream (``sim.live.LiveCarpet``: a new scene every 10 s, the
+people reappearing elsewhere at once, which no real person does). Each frame: every
 person's TRUE pressure (``sim.contact``) → summed → the virtual carpet's sensor (raw counts) →
 ``calibration.runtime.CalibratedFrames`` with the calibration a perfect procedure would make →
 ``edge.scene.SceneTracker`` with the default configuration. The placed scenes' per-person
@@ -48,14 +50,45 @@ GROUPS = {2: [("lunge", "sitting"), ("walking", "stepping"), ("squat", "turning"
           3: [("walking", "lunge", "sitting"), ("stepping", "squat", "raising_arms")]}
 
 
+STREAMS = [(2, 1), (2, 2), (3, 1)]  # (people, seed) of sim://'s own stream: a new scene every 10 s
+STREAM_S = 30.0
+
+
 def scene_list(quick: bool) -> list[tuple[str, tuple[str, ...], float, int]]:
-    """(name, activities per person, seconds, seed)."""
-    alone = [(f"alone-{a}", (a,), 6.0, 11) for a in ALONE]
+    """(name, activities per person (or ("live",) * people for a sim:// stream), seconds, seed)."""
+    alone = [(f"alone-{a}-{seed}", (a,), 6.0, seed) for seed in (11, 12) for a in ALONE]
     multi = [(f"{k}p-{'-'.join(acts)}", acts, 8.0, 21 + i) for k, rows in GROUPS.items() for i, acts in enumerate(rows)]
+    streams = [(f"sim-{k}p-seed{seed}", ("live",) * k, STREAM_S, seed) for k, seed in STREAMS]
     if quick:
-        alone = [s for s in alone if s[1][0] in ("lunge", "push_up", "sit_up", "sitting")]
+        alone = [s for s in alone if s[1][0] in ("lunge", "push_up", "sit_up", "sitting") and s[3] == 11]
         multi = multi[:1] + multi[4:5]
-    return alone + multi
+        streams = []
+    return alone + multi + streams
+
+
+def render_live(people: int, seconds: float, seed: int, cache: Path) -> dict[str, np.ndarray]:
+    """sim://?people=N&seed=S's own scenes (sim.live.LiveCarpet: the same people, a new scene every 10 s), per person."""
+    path = cache / f"live-{people}p-{seconds:g}s-{seed}.npz"
+    if path.exists():
+        with np.load(path) as z:
+            return {k: z[k] for k in z.files}
+    from sim.live import LiveCarpet
+
+    lc = LiveCarpet(96, 96, people, seed)
+    n = int(round(seconds * RATE_HZ))
+    own = np.zeros((n, people, 96, 96), np.float16)
+    transl = np.zeros((n, people, 3), np.float32)
+    names = np.empty((n, people), dtype=object)
+    for t in range(n):
+        for j, (person, mass) in enumerate(zip(lc.truth(t), lc.mass_kg)):
+            v = lc.body.forward(person["pose_aa"][None], person["betas"][None], person["transl_m"][None], vertices=True)
+            res = lc.contact.pressure_kpa(v["vertices"][0], lc.body.faces, mass, static=True, tissue_kpa_per_mm=lc.tissue)
+            own[t, j], transl[t, j], names[t, j] = res.pressure_kpa, person["transl_m"], person["activity"]
+    lc.close()
+    out = {"own_kpa": own, "transl_m": transl, "activity": names.astype(str)}
+    cache.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **out)
+    return out
 
 
 def render(activities: tuple[str, ...], seconds: float, seed: int, cache: Path) -> dict[str, np.ndarray]:
@@ -160,11 +193,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="the four hardest single-person activities and two group scenes")
     ap.add_argument("--cache", type=Path, default=Path("/tmp/scene_quality_cache"), help="placed scenes' per-person pressure")
     ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "scene_quality.json")
+    ap.add_argument("--before", type=Path, help="a result of this bench on the code before a change, kept beside as 'before'")
     args = ap.parse_args(argv)
     scenes, all_rows, all_times = [], [], []
     for name, acts, seconds, seed in scene_list(args.quick):
         try:
-            data = render(acts, seconds, seed, args.cache)
+            live = acts[0] == "live"
+            data = render_live(len(acts), seconds, seed, args.cache) if live else render(acts, seconds, seed, args.cache)
         except ValueError as exc:
             print(f"{name}: skipped ({exc})")
             continue
@@ -184,6 +219,10 @@ def main(argv: list[str] | None = None) -> int:
            "machine": describe(), "method": __doc__.split("\n\n", 2)[2].strip(),
            "by_people": by_people, "alone_by_activity": by_activity, "scenes": scenes,
            "scene_step_ms": {"median": round(float(np.median(all_times)), 3), "p99": round(float(np.percentile(all_times, 99)), 3)}}
+    if args.before:
+        old = json.loads(args.before.read_text())
+        out["before"] = {k: old[k] for k in ("command", "by_people", "alone_by_activity", "scene_step_ms")}
+        out["before"]["code"] = old.get("code", "the commit before this change")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps(by_people, indent=1))

@@ -8,19 +8,20 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
 1. prior: a contact that overlaps the sensels a track owned in the previous frame stays with
    that track (majority of overlapping sensels: a stance foot does not move), provided it lies
    within the track's reach;
-2. reach: the other contacts are clustered (all within ``group_radius_m`` of each other) and the
-   clusters are given to tracks by the Hungarian assignment (``linear_sum_assignment``) on the
-   distance to each track's predicted centre divided by its reach; a cluster within reach of a
-   track that another cluster took joins the nearest track in reach too (two hands landing at
-   once). A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts from
-   its centre (slowly forgotten), so a lying body reaches farther than a standing one;
+2. reach: each other contact joins the track that reaches it best, the least distance to the
+   track's predicted centre in units of the track's reach (several contacts may join one track:
+   two hands put down at once). A track's reach is ``reach_m`` beyond its extent, the farthest
+   of its contacts from its centre (slowly forgotten), so a lying body reaches farther than a
+   standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
    ``split_distance_m`` apart (two people who were one track walking apart), or a track
    carrying more than its own weight by ``min_person_force_n`` with a part that carries the
    excess (someone stepping in beside it: a foot that lifts and lands moves weight, it
    does not add any);
-4. clusters nobody reaches are new (key 0): the tracker matches them to coasting tracks or
-   starts new ones.
+4. contacts no track reaches are new: clustered so that all of a cluster's contacts lie within
+   ``group_radius_m`` of each other (two people side by side are not chained into one), each
+   cluster is a group with key 0, which the tracker matches to coasting tracks (Hungarian on
+   distance, ``linear_sum_assignment``) or starts as a new track.
 """
 
 from __future__ import annotations
@@ -29,7 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
-from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import cdist, pdist
@@ -125,7 +125,7 @@ def group_blobs(
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
-    _reach(centres_m, owner, bodies, group_radius_m)
+    _reach(centres_m, owner, bodies)
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
     far, heavy = set(), set()
@@ -154,27 +154,19 @@ def group_blobs(
     return Grouping(groups, frozenset(far), frozenset(heavy))
 
 
-def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body], group_radius_m: float) -> None:
-    """Give clusters of unowned blobs to the tracks that reach them (in place on ``owner``)."""
+def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
+    """Give each unowned blob to the body that reaches it best (in place on ``owner``): the least distance to
+    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands)."""
     free = np.flatnonzero(owner == 0)
     if len(free) == 0 or not bodies:
         return
-    keys = list(bodies)
-    cluster = within_span(centres_m[free], group_radius_m)
-    members = [free[cluster == c] for c in np.unique(cluster)]
+    keys = np.array(list(bodies))
     pred = np.array([bodies[k].centre_m for k in keys])
     reach = np.array([bodies[k].reach_m for k in keys])
-    # a cluster's distance to a body: its nearest blob to the body's centre, in units of the body's reach
-    d = np.stack([cdist(centres_m[m], pred).min(axis=0) for m in members]) / reach
-    rows, cols = linear_sum_assignment(np.where(d <= 1.0, d, 1e6))
-    taken = set()
-    for r, c in zip(rows, cols):
-        if d[r, c] <= 1.0:
-            owner[members[r]] = keys[c]
-            taken.add(r)
-    for r in range(len(members)):
-        if r not in taken and d[r].min() <= 1.0:
-            owner[members[r]] = keys[int(np.argmin(d[r]))]
+    d = cdist(centres_m[free], pred) / reach  # (free, bodies)
+    best = d.argmin(axis=1)
+    ok = d[np.arange(len(free)), best] <= 1.0
+    owner[free[ok]] = keys[best[ok]]
 
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
