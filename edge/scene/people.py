@@ -10,7 +10,8 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
    within the track's reach;
 2. reach: each other contact joins the track that reaches it best, the least distance to the
    track's predicted centre in units of the track's reach (several contacts may join one track:
-   two hands put down at once). A track's reach is ``reach_m`` beyond its extent, the farthest
+   two hands put down at once), among the tracks whose kept contacts still carry ANCHOR_FRACTION
+   of their weight (one whose contacts all lifted is matched again as a whole by the tracker). A track's reach is ``reach_m`` beyond its extent, the farthest
    of its contacts from its centre (slowly forgotten), so a lying body reaches farther than a
    standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
@@ -45,6 +46,15 @@ class Body:
     weight_n: float | None = None
     far_frames: int = 0
     heavy_frames: int = 0
+
+
+# Someone stepping in adds at least this fraction of the body's own weight: a person's force on the
+# board's path varies by ±30 % with posture (contact area, saturation), a newcomer adds a whole person.
+HEAVY_FRACTION = 0.5
+# A body reaches out only while the contacts it kept carry this fraction of its weight: a foot lands
+# while the other carries the body; contacts fading out while others appear (someone jumping away,
+# the simulator moving everyone at once) carry no weight and must not pull the new ones in.
+ANCHOR_FRACTION = 0.3
 
 
 def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -> np.ndarray:
@@ -125,7 +135,13 @@ def group_blobs(
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
-    _reach(centres_m, owner, bodies)
+    anchored = {}
+    for k in np.unique(owner[owner > 0]):
+        body = bodies[int(k)]
+        kept_n = float(forces_n[owner == k].sum())
+        if body.weight_n is None or kept_n >= ANCHOR_FRACTION * body.weight_n:
+            anchored[int(k)] = body
+    _reach(centres_m, owner, anchored)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
     far, heavy = set(), set()
@@ -149,9 +165,26 @@ def group_blobs(
         groups.append((idx, k))
     new = np.flatnonzero(owner == 0)
     if len(new):
-        cluster = within_span(centres_m[new], group_radius_m)
+        cluster = _new_people(centres_m[new], forces_n[new], group_radius_m, 0.25 * min_person_force_n)
         groups += [(new[cluster == c], 0) for c in np.unique(cluster)]
     return Grouping(groups, frozenset(far), frozenset(heavy))
+
+
+def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, faint_n: float) -> np.ndarray:
+    """(n,) cluster index of contacts no track reaches: the contacts carrying faint_n or more clustered
+    within span_m; fainter ones (a contact fading out, a toe) join the nearest cluster, or one of their own."""
+    strong = forces_n >= faint_n
+    if strong.all() or not strong.any():
+        return within_span(centres_m, span_m)
+    cluster = np.empty(len(centres_m), dtype=np.int64)
+    cluster[strong] = within_span(centres_m[strong], span_m)
+    d = cdist(centres_m[~strong], centres_m[strong])
+    nearest = d.argmin(axis=1)
+    own = d[np.arange(len(nearest)), nearest] > span_m
+    faint = cluster[strong][nearest]
+    faint[own] = cluster[strong].max() + 1 + np.arange(int(own.sum()))
+    cluster[~strong] = faint
+    return cluster
 
 
 def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
@@ -182,26 +215,35 @@ def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: fl
 
 def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray, body: Body, group_radius_m: float,
                  min_person_force_n: float) -> np.ndarray | None:
-    """Mask of the recently joined contacts that carry a track's excess weight (someone stepping in beside it), or None.
+    """Mask of the contacts that carry a track's excess weight (someone stepping in beside it), or None.
 
-    recent: (n,) bool, contacts that joined the track lately. They are clustered (all within
-    group_radius_m of each other); the cluster whose force is nearest the excess is the
-    newcomer, provided it and what remains each carry at least min_person_force_n.
+    The excess must reach HEAVY_FRACTION of the body's weight (and min_person_force_n). Candidates are
+    the clusters of contacts that joined the track lately (``recent``, all within group_radius_m of
+    each other) and, failing those, single contacts (a foot put where the other person's had just
+    been inherits that footprint's track); the one whose force is nearest the excess is the newcomer,
+    provided it carries at least half the excess and leaves min_person_force_n.
     """
-    if body.weight_n is None or len(centres_m) < 2 or not recent.any():
+    if body.weight_n is None or len(centres_m) < 2:
         return None
     total = float(forces_n.sum())
     excess = total - body.weight_n
-    if excess < min_person_force_n:
+    if excess < max(min_person_force_n, HEAVY_FRACTION * body.weight_n):
         return None
+
+    def fits(f: float) -> bool:
+        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= min_person_force_n
+
     idx = np.flatnonzero(recent)
-    comp = within_span(centres_m[idx], group_radius_m)
-    part_force = np.bincount(comp, weights=forces_n[idx])
-    ok = [c for c in range(len(part_force))
-          if part_force[c] >= min_person_force_n and total - part_force[c] >= min_person_force_n]
-    if not ok:
+    parts = []
+    if len(idx):
+        comp = within_span(centres_m[idx], group_radius_m)
+        parts = [idx[comp == c] for c in np.unique(comp)]
+        parts = [p for p in parts if fits(float(forces_n[p].sum()))]
+    if not parts:
+        parts = [np.array([i]) for i in range(len(centres_m)) if fits(float(forces_n[i]))]
+    if not parts:
         return None
-    best = min(ok, key=lambda c: abs(part_force[c] - excess))
+    best = min(parts, key=lambda p: abs(float(forces_n[p].sum()) - excess))
     part = np.zeros(len(centres_m), dtype=bool)
-    part[idx[comp == best]] = True
+    part[best] = True
     return part
