@@ -50,7 +50,7 @@ GROUPS = {2: [("lunge", "sitting"), ("walking", "stepping"), ("squat", "turning"
           3: [("walking", "lunge", "sitting"), ("stepping", "squat", "raising_arms")]}
 
 
-STREAMS = [(2, 1), (2, 2), (3, 1)]  # (people, seed) of sim://'s own stream: a new scene every 10 s
+STREAMS = [(2, 1), (2, 2), (3, 2)]  # (people, seed) of sim://'s own stream: a new scene every 10 s
 STREAM_S = 30.0
 
 

@@ -51,6 +51,8 @@ class Body:
 # Someone stepping in adds at least this fraction of the body's own weight: a person's force on the
 # board's path varies by ±30 % with posture (contact area, saturation), a newcomer adds a whole person.
 HEAVY_FRACTION = 0.5
+# ... and the body's own contacts still carry this fraction of its weight.
+KEEP_FRACTION = 0.8
 # A body reaches out only while the contacts it kept carry this fraction of its weight: a foot lands
 # while the other carries the body; contacts fading out while others appear (someone jumping away,
 # the simulator moving everyone at once) carry no weight and must not pull the new ones in.
@@ -221,7 +223,9 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
     the clusters of contacts that joined the track lately (``recent``, all within group_radius_m of
     each other) and, failing those, single contacts (a foot put where the other person's had just
     been inherits that footprint's track); the one whose force is nearest the excess is the newcomer,
-    provided it carries at least half the excess and leaves min_person_force_n.
+    provided it carries at least half the excess and the rest still carries KEEP_FRACTION of the
+    body's weight: someone lying back moves weight from buttocks to shoulders (and on the board's
+    path reads heavier, spread over more sensels), someone stepping in takes none from the body.
     """
     if body.weight_n is None or len(centres_m) < 2:
         return None
@@ -230,8 +234,8 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
     if excess < max(min_person_force_n, HEAVY_FRACTION * body.weight_n):
         return None
 
-    def fits(f: float) -> bool:
-        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= min_person_force_n
+    def fits(f: float) -> bool:  # carries the excess, and took no weight from the body (a back put down does)
+        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= max(min_person_force_n, KEEP_FRACTION * body.weight_n)
 
     idx = np.flatnonzero(recent)
     parts = []
