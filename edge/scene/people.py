@@ -10,15 +10,15 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
    within the track's reach;
 2. reach: each other contact joins the track that reaches it best, the least distance to the
    track's predicted centre in units of the track's reach (several contacts may join one track:
-   two hands put down at once), among the tracks whose kept contacts still carry ANCHOR_FRACTION
-   of their weight (one whose contacts all lifted is matched again as a whole by the tracker). A track's reach is ``reach_m`` beyond its extent, the farthest
-   of its contacts from its centre (slowly forgotten), so a lying body reaches farther than a
-   standing one;
+   two hands put down at once), among the tracks whose kept contacts still carry
+   ANCHOR_FRACTION of their weight (one whose contacts all lifted is matched again as a whole by
+   the tracker). A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
+   from its centre (slowly forgotten), so a lying body reaches farther than a standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
    ``split_distance_m`` apart (two people who were one track walking apart), or a track
-   carrying more than its own weight by ``min_person_force_n`` with a part that carries the
-   excess (someone stepping in beside it: a foot that lifts and lands moves weight, it
-   does not add any);
+   carrying more than its own weight by HEAVY_FRACTION of it with a part that carries the
+   excess while the rest still carries KEEP_FRACTION of the weight (someone stepping in beside
+   it: a foot that lifts and lands, or a back put down, moves weight; it adds none);
 4. contacts no track reaches are new: clustered so that all of a cluster's contacts lie within
    ``group_radius_m`` of each other (two people side by side are not chained into one), each
    cluster is a group with key 0, which the tracker matches to coasting tracks (Hungarian on

@@ -21,9 +21,6 @@ def render(rows: int, cols: int, pitch_m: float, people: list[dict]) -> np.ndarr
     """
     s = max(1, int(round(pitch_m / 0.004)))
     fine = pitch_m / s
-    ys, xs = np.mgrid[0 : rows * s, 0 : cols * s]
-    xs = (xs + 0.5) * fine
-    ys = (ys + 0.5) * fine
     p = np.zeros((rows * s, cols * s))
     for person in people:
         c = np.asarray(person["centre_m"], float)
@@ -35,10 +32,16 @@ def render(rows: int, cols: int, pitch_m: float, people: list[dict]) -> np.ndarr
         loads = (0.5 + 0.5 * sn, 0.5 - 0.5 * sn)
         for sgn, load in zip((1, -1), loads):
             fc = c + sgn * 0.09 * side + sgn * sn * 0.15 * fwd
+            c0, c1 = max(0, int((fc[0] - FOOT_A_M) / fine)), min(cols * s, int((fc[0] + FOOT_A_M) / fine) + 2)
+            r0, r1 = max(0, int((fc[1] - FOOT_A_M) / fine)), min(rows * s, int((fc[1] + FOOT_A_M) / fine) + 2)
+            if c0 >= c1 or r0 >= r1:  # the foot's box only (a foot off the carpet: nothing)
+                continue
+            ys, xs = np.mgrid[r0:r1, c0:c1]
+            xs, ys = (xs + 0.5) * fine, (ys + 0.5) * fine
             u = (xs - fc[0]) * fwd[0] + (ys - fc[1]) * fwd[1]
             v = (xs - fc[0]) * side[0] + (ys - fc[1]) * side[1]
             inside = (u / FOOT_A_M) ** 2 + (v / FOOT_B_M) ** 2 <= 1.0
-            p[inside] += load * person["mass_kg"] * G / (np.pi * FOOT_A_M * FOOT_B_M) / 1e3
+            p[r0:r1, c0:c1][inside] += load * person["mass_kg"] * G / (np.pi * FOOT_A_M * FOOT_B_M) / 1e3
     return p.reshape(rows, s, cols, s).mean(axis=(1, 3)).astype(np.float32)
 
 
@@ -69,15 +72,17 @@ def render_pads(rows: int, cols: int, pitch_m: float, pads: list[tuple[float, fl
     (a foot, a hand, a knee, buttocks, shoulder blades), box-averaged over each sensel → kPa (rows, cols)."""
     s = max(1, int(round(pitch_m / 0.004)))
     fine = pitch_m / s
-    ys, xs = np.mgrid[0 : rows * s, 0 : cols * s]
-    xs = (xs + 0.5) * fine
-    ys = (ys + 0.5) * fine
     p = np.zeros((rows * s, cols * s))
     for x, y, a, b, force_n in pads:
         if force_n <= 0:
             continue
-        inside = ((xs - x) / a) ** 2 + ((ys - y) / b) ** 2 <= 1.0
-        p[inside] += force_n / (np.pi * a * b) / 1e3
+        c0, c1 = max(0, int((x - a) / fine)), min(cols * s, int((x + a) / fine) + 2)  # the pad's box only
+        r0, r1 = max(0, int((y - b) / fine)), min(rows * s, int((y + b) / fine) + 2)
+        if c0 >= c1 or r0 >= r1:
+            continue
+        ys, xs = np.mgrid[r0:r1, c0:c1]
+        inside = (((xs + 0.5) * fine - x) / a) ** 2 + (((ys + 0.5) * fine - y) / b) ** 2 <= 1.0
+        p[r0:r1, c0:c1][inside] += force_n / (np.pi * a * b) / 1e3
     return p.reshape(rows, s, cols, s).mean(axis=(1, 3)).astype(np.float32)
 
 
