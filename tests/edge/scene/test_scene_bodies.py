@@ -221,3 +221,20 @@ def test_three_people_side_by_side_stay_three():
         return people, [], {i: p["centre_m"] for i, p in enumerate(people)}
     score, log, _ = run_people(scene, 42)
     assert all(len(p) == 3 for p in log[3:]) and score.id_switches == 0 and score.false_positives == 0, score
+
+
+STOP_X = 1.25  # the walker's nearest foot ends 0.3 m from the sitter's nearest foot
+
+
+def test_walking_up_to_someone_sitting_keeps_two():
+    sit = [pad(0.5, 0.9, 0.28, 0.6 * W), foot(0.95, 0.81, 0.2 * W), foot(0.95, 0.99, 0.2 * W)]
+
+    def scene(t):  # walks in from the right edge to stand beside the sitter's feet, then shifts from foot to foot
+        x = max(STOP_X, 1.75 - 0.6 * t)
+        b = walker((1.75, 0.55), (-0.6, 0.0), t, 75.0) if x > STOP_X else walker((STOP_X, 0.55), (0.0, 0.0), t, 75.0)
+        if x <= STOP_X and int(t * 2) % 2:
+            b["phase"] = (t * 0.8) % 1.0  # shifting weight from foot to foot
+        return [b], sit, {0: np.array([0.65, 0.9]), 1: b["centre_m"]}
+    score, log, st = run_people(scene, 60)
+    assert all(len(p) == 2 for p in log[3:]), [len(p) for p in log]
+    assert score.id_switches == 0 and score.false_positives == 0 and st.counters["tracks_born"] == 2, score
