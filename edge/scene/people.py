@@ -31,8 +31,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import cdist, pdist
 
 
@@ -93,12 +91,21 @@ def within_span(centres_m: np.ndarray, span_m: float) -> np.ndarray:
 
 
 def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
-    """(n, 2) points → (n,) cluster index; points within radius_m (transitively) share one."""
-    if len(centres_m) <= 1:
-        return np.zeros(len(centres_m), dtype=np.int64)
-    adjacent = cdist(centres_m, centres_m) <= radius_m
-    _, comp = connected_components(csr_matrix(adjacent), directed=False)
-    return comp
+    """(n, 2) points → (n,) cluster index; points within radius_m (transitively) share one.
+
+    A handful of contacts: the reachability matrix is squared until it stops growing (log2 n
+    products of an n×n boolean matrix) instead of building a sparse graph.
+    """
+    n = len(centres_m)
+    if n <= 1:
+        return np.zeros(n, dtype=np.int64)
+    reach = cdist(centres_m, centres_m) <= radius_m
+    while True:
+        wider = (reach.astype(np.uint8) @ reach.astype(np.uint8)) > 0
+        if (wider == reach).all():
+            break
+        reach = wider
+    return np.unique(reach.argmax(axis=1), return_inverse=True)[1].astype(np.int64)
 
 
 @dataclass(frozen=True, slots=True)
@@ -206,7 +213,7 @@ def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) ->
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
     """(keep, rest) bool masks when the contacts fall in parts more than split_distance_m apart (the heaviest part keeps)."""
-    if len(centres_m) < 2:
+    if len(centres_m) < 2 or pdist(centres_m).max() <= split_distance_m:  # the usual case, at once
         return None
     comp = single_linkage(centres_m, split_distance_m)
     if comp.max() == 0:

@@ -236,8 +236,8 @@ class SceneTracker:
         same = (labels > 0) & (self._prev_keys == np.concatenate([[0], priors])[labels]) & (self._prev_keys > 0)
         if not same.any():
             return np.full(n, t_s)
-        latest = ndimage.maximum(np.where(same, self._prev_join, -np.inf), labels, index=np.arange(1, n + 1))
-        latest = np.asarray(latest, dtype=np.float64)
+        latest = np.full(n, -np.inf)
+        np.maximum.at(latest, labels[same] - 1, self._prev_join[same])  # only the contact sensels: cheap
         return np.where(np.isfinite(latest), latest, t_s)
 
     def _stillness(self, tr, filtered: np.ndarray, mask: np.ndarray) -> bool:
