@@ -1,0 +1,222 @@
+"""Heading from the feet: resolve the model's 180° ambiguity of global orientation per track.
+
+    resolver = HeadingResolver(HeadingParams.load())         # one per track
+    pose_aa = resolver.resolve(pose_aa, person_kpa, pitch_m)  # (72,) maybe turned 180° about z
+
+The model predicts the body's global orientation well up to a half turn about the vertical: in
+a large share of frames it faces backwards. The pressure itself says which way is forward: a
+foot's blob is elongated along the foot, and its centre of pressure (weighted by kPa) lies
+behind the blob's plain centroid (the heel carries more load than the forefoot), so
+``centroid − CoP`` along the blob's long axis points to the toes.
+
+Per frame, every foot-like blob (area, length and elongation within the parameters, the feet
+carrying most of the person's force) gives a forward vector (toe direction × how clearly the
+offset shows, in sensels); their sum is the frame's cue. Per track, :class:`HeadingResolver`
+sums the cues into evidence that the MODEL faces backwards (weighted by how reliable the cue is
+for the activity the model sees), and publishes the pose turned by Rz(π) while that evidence
+holds. Without a cue (a person lying, sitting, on their hands) the evidence decays and, until
+it does, keeps the body from flipping back and forth.
+
+Yaw convention: ``yaw(R)`` is the twist about carpet z of R · R0ᵀ, R0 = +90° about x (upright,
+facing −y; design.md), the same twist ``export.metrics.heading_error_rad`` measures. An upright
+body with yaw ψ faces Rz(ψ)·(0, −1, 0).
+
+Parameters live in ``heading.json`` beside this file, fitted offline by ``export/heading_cue.py``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+PARAMS_FILE = Path(__file__).with_name("heading.json")
+_R0_INV_Q = np.array([-np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4)])  # (x, y, z, w) of R0ᵀ
+
+
+@dataclass(frozen=True)
+class HeadingParams:
+    """Foot-blob gates (physical units) and the track's evidence dynamics."""
+
+    floor_kpa: float = 0.5           # sensels above this form blobs
+    min_area_cm2: float = 40.0       # a foot's contact: at least this …
+    max_area_cm2: float = 400.0      # … and at most this
+    min_length_m: float = 0.10       # long-axis extent (4σ of the sensel spread)
+    max_length_m: float = 0.36
+    min_elongation: float = 1.4      # long σ / short σ
+    min_offset_sensels: float = 0.05  # |centroid − CoP| along the long axis below this: no vote
+    min_foot_share: float = 0.8      # the foot-like blobs must carry this share of the person's force
+    max_vote: float = 1.0            # one foot's vote is offset/sensel clipped to this
+    decay: float = 0.97              # per frame, of the track's summed evidence
+    max_evidence: float = 5.0        # the evidence is clipped to ±this
+    min_evidence: float = 0.3        # published turned when the evidence that the model faces backwards exceeds this
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> "HeadingParams":
+        """From a JSON object of these fields (the packaged heading.json by default); ValueError names a bad file."""
+        p = Path(path) if path is not None else PARAMS_FILE
+        try:
+            data = json.loads(p.read_text())
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"{p}: unreadable heading parameters ({exc}); re-run export/heading_cue.py") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{p}: expected a JSON object of heading parameters; re-run export/heading_cue.py")
+        return cls.from_dict(data.get("params", data), where=str(p))
+
+    @classmethod
+    def from_dict(cls, data: dict, where: str = "heading parameters") -> "HeadingParams":
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{where}: unknown field(s) {unknown}; known: {sorted(known)}")
+        try:
+            return cls(**{k: float(v) for k, v in data.items()})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: every field must be a number ({exc})") from None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def load(path: str | Path | None = None, activities: list[str] | None = None) -> tuple[HeadingParams, np.ndarray | None]:
+    """The parameters and, for a bundle's ``activities`` (in its order), the cue's weight per activity
+    from a fitted JSON (the packaged heading.json by default); an activity the file does not name
+    weighs 0 (the cue is not trusted there). ValueError names a bad file."""
+    p = Path(path) if path is not None else PARAMS_FILE
+    params = HeadingParams.load(p)
+    if activities is None:
+        return params, None
+    table = json.loads(p.read_text()).get("activity_weight")
+    if table is None:
+        return params, None
+    try:
+        return params, np.array([float(table.get(a, 0.0)) for a in activities])
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
+
+
+def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, float]:
+    """(H,W) one person's kPa → (K,2) forward vectors (x, y) of the K foot-like blobs (length = vote),
+    and the share of the person's force those blobs carry."""
+    p = np.asarray(pressure_kpa, np.float64)
+    loaded = p > params.floor_kpa
+    if not loaded.any():
+        return np.zeros((0, 2)), 0.0
+    labels, n = ndimage.label(loaded)
+    sensel_cm2 = (pitch_m * 100) ** 2
+    votes, force = [], 0.0
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        sub = labels[sl] == k
+        area = sub.sum() * sensel_cm2
+        if area < params.min_area_cm2 or area > params.max_area_cm2:
+            continue
+        rr, cc = np.nonzero(sub)
+        w = p[sl][sub]
+        xy = np.stack([cc + sl[1].start, rr + sl[0].start], -1).astype(np.float64)  # sensel units, x = column
+        centroid = xy.mean(0)
+        cov = np.cov((xy - centroid).T) if len(xy) > 2 else np.zeros((2, 2))
+        evals, evecs = np.linalg.eigh(cov)  # ascending
+        if evals[0] <= 0:
+            continue
+        length_m = 4 * np.sqrt(evals[1]) * pitch_m
+        if not params.min_length_m <= length_m <= params.max_length_m:
+            continue
+        if np.sqrt(evals[1] / evals[0]) < params.min_elongation:
+            continue
+        axis = evecs[:, 1]
+        cop = (xy * w[:, None]).sum(0) / w.sum()
+        offset = float((centroid - cop) @ axis)  # > 0: the toes lie along +axis
+        if abs(offset) < params.min_offset_sensels:
+            continue
+        votes.append(np.sign(offset) * min(abs(offset), params.max_vote) * axis)
+        force += w.sum()
+    return np.array(votes).reshape(-1, 2), float(force / p[loaded].sum())
+
+
+def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> np.ndarray:
+    """(H,W) → (2,) the frame's forward evidence: the feet's votes summed (two feet that disagree
+    cancel); none when anything but feet carries much of the weight (hands, seat, knees)."""
+    v, share = foot_votes(pressure_kpa, pitch_m, params)
+    return v.sum(0) if len(v) and share >= params.min_foot_share else np.zeros(2)
+
+
+def yaw_rad(orient_aa: np.ndarray) -> np.ndarray:
+    """(…,3) global orientation (axis-angle) → (…) yaw in (−π, π]: the twist about z of R·R0ᵀ."""
+    from scipy.spatial.transform import Rotation
+
+    a = np.asarray(orient_aa, np.float64)
+    q = (Rotation.from_rotvec(a.reshape(-1, 3)) * Rotation.from_quat(_R0_INV_Q)).as_quat()
+    return _wrap(2 * np.arctan2(q[:, 2], q[:, 3])).reshape(a.shape[:-1])
+
+
+def cue_yaw_rad(forward_xy: np.ndarray) -> float:
+    """(2,) a forward vector on the carpet → the yaw of an upright body facing it."""
+    return float(_wrap(np.arctan2(forward_xy[1], forward_xy[0]) + np.pi / 2))
+
+
+def turn_half(pose_aa: np.ndarray) -> np.ndarray:
+    """(…,72) or (…,3) → the same with the global orientation turned 180° about carpet z (Rz(π)·R)."""
+    from scipy.spatial.transform import Rotation
+
+    out = np.array(pose_aa, np.float32, copy=True)
+    r = Rotation.from_rotvec(out[..., 0:3].reshape(-1, 3).astype(np.float64))
+    out[..., 0:3] = (Rotation.from_rotvec([0.0, 0.0, np.pi]) * r).as_rotvec().reshape(out[..., 0:3].shape)
+    return out
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+class HeadingResolver:
+    """One track's heading state: the evidence that the model faces backwards right now.
+
+    The evidence is a scalar, relative to the model (not to the carpet), because the model's
+    mistake persists: it faces backwards for whole stretches while its yaw follows the person's
+    turns. Each frame with a foot cue adds ``weight · |cue| · −cos(model yaw − cue yaw)``
+    (positive: the model disagrees with the feet), ``weight`` being the cue's reliability for the
+    activity the model sees (``activity_weight``, 1 without one). The sum decays by ``decay`` per
+    frame and is clipped to ±``max_evidence`` so new evidence can overturn it. When the model's
+    own yaw jumps by more than 90° between two frames (it changed its mind; a person does not
+    turn that fast), the evidence changes sign with it, so the published body does not jump.
+    The pose is published turned when the evidence exceeds ``min_evidence``.
+    """
+
+    def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None) -> None:
+        self.params = params or HeadingParams()
+        self.activity_weight = None if activity_weight is None else np.asarray(activity_weight, np.float64)
+        self.evidence = 0.0
+        self.last_model_yaw: float | None = None
+        self.flips = 0  # frames published turned
+
+    def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
+                activity_probs: np.ndarray | None = None) -> np.ndarray:
+        """(72,) the model's pose, (H,W) the person's kPa (as the model saw it), (A,) the model's
+        activity probabilities → (72,) the pose to publish."""
+        return self.decide(pose_aa, frame_cue(person_kpa, pitch_m, self.params), activity_probs)
+
+    def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`resolve` with the frame's cue (2,) already computed."""
+        p = self.params
+        yaw = float(yaw_rad(np.asarray(pose_aa[:3])))
+        if self.last_model_yaw is not None and abs(_wrap(yaw - self.last_model_yaw)) > np.pi / 2:
+            self.evidence = -self.evidence
+        self.last_model_yaw = yaw
+        strength = float(np.hypot(cue[0], cue[1]))
+        vote = 0.0
+        if strength > 0:
+            weight = 1.0
+            if self.activity_weight is not None and activity_probs is not None:
+                weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
+            vote = -weight * strength * np.cos(yaw - cue_yaw_rad(cue))
+        self.evidence = float(np.clip(self.evidence * p.decay + vote, -p.max_evidence, p.max_evidence))
+        if self.evidence > p.min_evidence:
+            self.flips += 1
+            return turn_half(pose_aa)
+        return np.asarray(pose_aa)
+
+
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]
