@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from edge.infer.heading import PARAMS_FILE, HeadingParams, HeadingResolver, cue_yaw_rad, frame_cue, yaw_rad
+from edge.infer.heading import PARAMS_FILE, HeadingParams, cue_yaw_rad, frame_cue, resolve_sequence, yaw_rad
 from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track
 
@@ -51,13 +51,6 @@ def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: i
         probs = np.exp(logits - logits.max(-1, keepdims=True))
         out.append((rot6d_to_axis_angle(pred["rot6d"]), p, probs / probs.sum(-1, keepdims=True)))
     return out
-
-
-def replay(pose_aa: np.ndarray, cues: np.ndarray, probs: np.ndarray, params: HeadingParams,
-           weights: np.ndarray | None) -> np.ndarray:
-    """(L,72) poses, (L,2) frame cues, (L,A) activity probabilities → (L,72): one track through a fresh resolver."""
-    r = HeadingResolver(params, weights)
-    return np.stack([r.decide(pose_aa[t], cues[t], probs[t]) for t in range(len(pose_aa))])
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -100,7 +93,7 @@ def fit(tracks: list[Track], preds: list, pitch_m: float, names: list[str], grid
             cue_cache[ck] = cues, activity_weights(tracks, preds, cues, names)
         cues, weights = cue_cache[ck]
         w = np.array([weights[n] for n in names])
-        out = [replay(pose, c, probs, params, w) for (pose, _, probs), c in zip(preds, cues)]
+        out = [resolve_sequence(pose, c, probs, params, w) for (pose, _, probs), c in zip(preds, cues)]
         tried.append({"params": params.to_dict(), "activity_weight": weights, "wrong_90": wrong_share(out, tracks)})
     best = min(tried, key=lambda r: r["wrong_90"])
     return HeadingParams.from_dict(best["params"]), best["activity_weight"], tried

@@ -219,4 +219,13 @@ class HeadingResolver:
         return np.asarray(pose_aa)
 
 
-__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]
+def resolve_sequence(pose_aa: np.ndarray, cues: np.ndarray, activity_probs: np.ndarray | None,
+                     params: HeadingParams, activity_weight: np.ndarray | None = None) -> np.ndarray:
+    """(L,72) one track's poses frame by frame, (L,2) their frame cues (:func:`frame_cue`), (L,A) activity
+    probabilities or None → (L,72) what a fresh resolver publishes (offline evaluation and fitting)."""
+    r = HeadingResolver(params, activity_weight)
+    probs = [None] * len(pose_aa) if activity_probs is None else activity_probs
+    return np.stack([r.decide(pose_aa[t], cues[t], probs[t]) for t in range(len(pose_aa))]).astype(np.float32)
+
+
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]
