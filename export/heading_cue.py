@@ -25,11 +25,11 @@ from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track
 
 GRID = {
-    "min_foot_share": (0.0, 0.8),
-    "min_offset_sensels": (0.05, 0.15),
-    "decay": (0.9, 0.97, 0.99),
-    "max_evidence": (3.0, 10.0),
-    "min_evidence": (0.1, 0.5),
+    "min_offset_mm": (3.0, 5.0),
+    "max_offset_mm": (15.0, 20.0, 30.0),
+    "decay": (0.97, 0.99),
+    "max_evidence": (10.0, 30.0),
+    "min_evidence": (0.5, 1.5),
 }
 
 
@@ -84,7 +84,7 @@ def fit(tracks: list[Track], preds: list, pitch_m: float, names: list[str], grid
     base = base or HeadingParams()
     tried, cue_cache = [], {}
     keys = list(grid)
-    cue_keys = ("floor_kpa", "min_elongation", "min_offset_sensels", "min_foot_share")
+    cue_keys = ("floor_kpa", "min_elongation", "min_offset_mm", "max_offset_mm", "min_foot_share")
     for values in itertools.product(*(grid[k] for k in keys)):
         params = replace(base, **dict(zip(keys, values)))
         ck = tuple(getattr(params, k) for k in cue_keys)
@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     from sim.dataset import DatasetError
 
     try:
-        tracks, pitch, _ = user_tracks(args.data, args.split)
+        tracks, pitch, ds = user_tracks(args.data, args.split)
     except (DatasetError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -125,7 +125,8 @@ def main(argv: list[str] | None = None) -> int:
     params, weights, tried = fit(tracks, preds, pitch, names)
     after = min(r["wrong_90"] for r in tried)
     result = {"params": params.to_dict(), "activity_weight": weights,
-              "fit": {"bundle": str(args.bundle), "data": str(args.data), "split": args.split, "tracks": len(tracks),
+              "fit": {"bundle": str(args.bundle), "data": str(args.data), "dataset_settings": ds.manifest.get("settings"),
+                      "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split, "tracks": len(tracks),
                       "frames": int(sum(len(t) for t in tracks)), "wrong_90_model": before, "wrong_90_resolved": after,
                       "grid": {k: list(v) for k, v in GRID.items()}}}
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")

@@ -10,8 +10,8 @@ behind the blob's plain centroid (the heel carries more load than the forefoot),
 ``centroid − CoP`` along the blob's long axis points to the toes.
 
 Per frame, every foot-like blob (area, length and elongation within the parameters, the feet
-carrying most of the person's force) gives a forward vector (toe direction × how clearly the
-offset shows, in sensels); their sum is the frame's cue. Per track, :class:`HeadingResolver`
+carrying most of the person's force) whose offset is clear but not extreme (an extreme one is a
+forefoot or toes carrying the weight) gives a unit vote toward its toes; their sum is the frame's cue. Per track, :class:`HeadingResolver`
 sums the cues into evidence that the MODEL faces backwards (weighted by how reliable the cue is
 for the activity the model sees), and publishes the pose turned by Rz(π) while that evidence
 holds. Without a cue (a person lying, sitting, on their hands) the evidence decays and, until
@@ -34,7 +34,6 @@ import numpy as np
 from scipy import ndimage
 
 PARAMS_FILE = Path(__file__).with_name("heading.json")
-_R0_INV_Q = np.array([-np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4)])  # (x, y, z, w) of R0ᵀ
 
 
 @dataclass(frozen=True)
@@ -47,9 +46,9 @@ class HeadingParams:
     min_length_m: float = 0.10       # long-axis extent (4σ of the sensel spread)
     max_length_m: float = 0.36
     min_elongation: float = 1.4      # long σ / short σ
-    min_offset_sensels: float = 0.05  # |centroid − CoP| along the long axis below this: no vote
+    min_offset_mm: float = 5.0       # |centroid − CoP| along the long axis: below this no vote (noise) …
+    max_offset_mm: float = 20.0      # … nor above this (a forefoot or a toe carrying the weight: bending, lunge)
     min_foot_share: float = 0.8      # the foot-like blobs must carry this share of the person's force
-    max_vote: float = 1.0            # one foot's vote is offset/sensel clipped to this
     decay: float = 0.97              # per frame, of the track's summed evidence
     max_evidence: float = 5.0        # the evidence is clipped to ±this
     min_evidence: float = 0.3        # published turned when the evidence that the model faces backwards exceeds this
@@ -99,41 +98,42 @@ def load(path: str | Path | None = None, activities: list[str] | None = None) ->
 
 
 def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, float]:
-    """(H,W) one person's kPa → (K,2) forward vectors (x, y) of the K foot-like blobs (length = vote),
-    and the share of the person's force those blobs carry."""
-    p = np.asarray(pressure_kpa, np.float64)
+    """(H,W) one person's kPa → (K,2) unit forward vectors (x, y) of the K foot-like blobs whose heel
+    offset is clear and plausible, and the share of the person's force all foot-like blobs carry.
+
+    The blobs' moments come from one labelling of the loaded box and one reduceat (no loop over blobs)."""
+    p = np.asarray(pressure_kpa)
     loaded = p > params.floor_kpa
-    if not loaded.any():
+    rows, cols = np.flatnonzero(loaded.any(1)), np.flatnonzero(loaded.any(0))
+    if not len(rows):
         return np.zeros((0, 2)), 0.0
-    labels, n = ndimage.label(loaded)
-    sensel_cm2 = (pitch_m * 100) ** 2
-    votes, force = [], 0.0
-    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
-        sub = labels[sl] == k
-        area = sub.sum() * sensel_cm2
-        if area < params.min_area_cm2 or area > params.max_area_cm2:
-            continue
-        rr, cc = np.nonzero(sub)
-        w = p[sl][sub]
-        xy = np.stack([cc + sl[1].start, rr + sl[0].start], -1).astype(np.float64)  # sensel units, x = column
-        centroid = xy.mean(0)
-        cov = np.cov((xy - centroid).T) if len(xy) > 2 else np.zeros((2, 2))
-        evals, evecs = np.linalg.eigh(cov)  # ascending
-        if evals[0] <= 0:
-            continue
-        length_m = 4 * np.sqrt(evals[1]) * pitch_m
-        if not params.min_length_m <= length_m <= params.max_length_m:
-            continue
-        if np.sqrt(evals[1] / evals[0]) < params.min_elongation:
-            continue
-        axis = evecs[:, 1]
-        cop = (xy * w[:, None]).sum(0) / w.sum()
-        offset = float((centroid - cop) @ axis)  # > 0: the toes lie along +axis
-        if abs(offset) < params.min_offset_sensels:
-            continue
-        votes.append(np.sign(offset) * min(abs(offset), params.max_vote) * axis)
-        force += w.sum()
-    return np.array(votes).reshape(-1, 2), float(force / p[loaded].sum())
+    box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+    labels, n = ndimage.label(loaded[box])
+    rr, cc = np.nonzero(labels)
+    lab = labels[rr, cc]
+    w = p[box][rr, cc].astype(np.float64)
+    x, y = cc.astype(np.float64), rr.astype(np.float64)  # sensel units in the box, x = column
+    order = np.argsort(lab, kind="stable")  # sums per blob: one reduceat over the blobs' runs
+    starts = np.searchsorted(lab[order], np.arange(1, n + 1))
+    sums = np.add.reduceat(np.stack([np.ones_like(x), x, y, x * x, y * y, x * y, w, w * x, w * y], -1)[order], starts)
+    count, sx, sy, sxx, syy, sxy, force, swx, swy = sums.T
+    mx, my = sx / count, sy / count
+    dof = np.maximum(count - 1, 1)
+    sxx, syy, sxy = (sxx - count * mx * mx) / dof, (syy - count * my * my) / dof, (sxy - count * mx * my) / dof
+    half_gap = np.sqrt(((sxx - syy) / 2) ** 2 + sxy ** 2)
+    major, minor = (sxx + syy) / 2 + half_gap, (sxx + syy) / 2 - half_gap
+    area_cm2 = count * (pitch_m * 100) ** 2
+    length_m = 4 * np.sqrt(np.maximum(major, 0)) * pitch_m
+    foot = ((area_cm2 >= params.min_area_cm2) & (area_cm2 <= params.max_area_cm2) & (minor > 0)
+            & (length_m >= params.min_length_m) & (length_m <= params.max_length_m))
+    foot &= np.sqrt(np.where(foot, major / np.where(minor > 0, minor, 1), 0)) >= params.min_elongation
+    share = float(force[foot].sum() / w.sum())
+    phi = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the major axis
+    axis = np.stack([np.cos(phi), np.sin(phi)], -1)
+    cop = np.stack([swx, swy], -1) / force[:, None]
+    offset_mm = ((np.stack([mx, my], -1) - cop) * axis).sum(-1) * pitch_m * 1e3  # > 0: the toes lie along +axis
+    vote = foot & (np.abs(offset_mm) >= params.min_offset_mm) & (np.abs(offset_mm) <= params.max_offset_mm)
+    return np.sign(offset_mm[vote])[:, None] * axis[vote], share
 
 
 def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> np.ndarray:
@@ -143,13 +143,21 @@ def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -
     return v.sum(0) if len(v) and share >= params.min_foot_share else np.zeros(2)
 
 
-def yaw_rad(orient_aa: np.ndarray) -> np.ndarray:
-    """(…,3) global orientation (axis-angle) → (…) yaw in (−π, π]: the twist about z of R·R0ᵀ."""
-    from scipy.spatial.transform import Rotation
-
+def _quaternion(orient_aa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(…,3) axis-angle → (w (…), v (…,3)) of the unit quaternion."""
     a = np.asarray(orient_aa, np.float64)
-    q = (Rotation.from_rotvec(a.reshape(-1, 3)) * Rotation.from_quat(_R0_INV_Q)).as_quat()
-    return _wrap(2 * np.arctan2(q[:, 2], q[:, 3])).reshape(a.shape[:-1])
+    theta = np.linalg.norm(a, axis=-1)
+    k = np.where(theta > 1e-12, np.sin(theta / 2) / np.where(theta > 1e-12, theta, 1.0), 0.5)
+    return np.cos(theta / 2), a * k[..., None]
+
+
+def yaw_rad(orient_aa: np.ndarray) -> np.ndarray:
+    """(…,3) global orientation (axis-angle) → (…) yaw in (−π, π]: the twist about z of R·R0ᵀ.
+
+    With q = (w, v) the quaternion of R and R0ᵀ = −90° about x, the twist of q ⊗ q(R0ᵀ) about z is
+    2·atan2(v_y + v_z, w + v_x) (the common factor cos 45° cancels)."""
+    w, v = _quaternion(orient_aa)
+    return _wrap(2 * np.arctan2(v[..., 1] + v[..., 2], w + v[..., 0]))
 
 
 def cue_yaw_rad(forward_xy: np.ndarray) -> float:
@@ -158,12 +166,17 @@ def cue_yaw_rad(forward_xy: np.ndarray) -> float:
 
 
 def turn_half(pose_aa: np.ndarray) -> np.ndarray:
-    """(…,72) or (…,3) → the same with the global orientation turned 180° about carpet z (Rz(π)·R)."""
-    from scipy.spatial.transform import Rotation
+    """(…,72) or (…,3) → the same with the global orientation turned 180° about carpet z (Rz(π)·R).
 
+    q(Rz(π)) ⊗ (w, x, y, z) = (−z, −y, x, w); back to axis-angle with w ≥ 0."""
     out = np.array(pose_aa, np.float32, copy=True)
-    r = Rotation.from_rotvec(out[..., 0:3].reshape(-1, 3).astype(np.float64))
-    out[..., 0:3] = (Rotation.from_rotvec([0.0, 0.0, np.pi]) * r).as_rotvec().reshape(out[..., 0:3].shape)
+    w, v = _quaternion(out[..., 0:3])
+    qw, qv = -v[..., 2], np.stack([-v[..., 1], v[..., 0], w], -1)
+    sign = np.where(qw < 0, -1.0, 1.0)
+    qw, qv = qw * sign, qv * sign[..., None]
+    sin_half = np.linalg.norm(qv, axis=-1)
+    angle = 2 * np.arctan2(sin_half, qw)
+    out[..., 0:3] = qv * np.where(sin_half > 1e-12, angle / np.where(sin_half > 1e-12, sin_half, 1.0), 2.0)[..., None]
     return out
 
 

@@ -22,8 +22,8 @@ def upright(yaw: float) -> np.ndarray:
     return pose
 
 
-def feet(toes: str, heel_kpa: float = 12.0, toe_kpa: float = 4.0) -> np.ndarray:
-    """(96,96) two parallel feet 13 sensels long (25 cm), 5 wide, heel-heavy, toes toward −y ("up") or +y ("down")."""
+def feet(toes: str, heel_kpa: float = 10.0, toe_kpa: float = 6.0) -> np.ndarray:
+    """(96,96) two parallel feet 13 sensels long (25 cm), 5 wide, heel-heavy (CoP 11 mm behind the centroid), toes toward −y ("up") or +y ("down")."""
     p = np.zeros((96, 96), np.float32)
     ramp = np.linspace(toe_kpa, heel_kpa, 13)[:, None]  # row 0 of the foot is its toe
     if toes == "down":
@@ -59,6 +59,8 @@ def test_heel_heavy_feet_point_to_their_toes():
     round_blob = np.zeros((96, 96), np.float32)
     round_blob[40:48, 40:48] = np.linspace(4, 12, 8)[:, None]
     assert not frame_cue(round_blob, PITCH, params).any()
+    # an extreme offset (22 mm: a forefoot or toes carrying the weight, as in bending) is not a vote
+    assert not frame_cue(feet("up", 12.0, 4.0), PITCH, params).any()
     seat = feet("up")
     seat[60:80, 30:60] = 10.0
     assert not frame_cue(seat, PITCH, params).any()

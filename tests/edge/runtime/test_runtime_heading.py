@@ -24,7 +24,7 @@ def feet_toward_minus_y() -> np.ndarray:
     """Two heel-heavy feet, toes at the lower rows: a person facing −y (yaw 0)."""
     p = np.zeros((H, W), np.float32)
     for c0 in (40, 50):
-        p[40:53, c0:c0 + 5] = np.linspace(4.0, 12.0, 13)[:, None]
+        p[40:53, c0:c0 + 5] = np.linspace(6.0, 10.0, 13)[:, None]  # CoP 11 mm behind the centroid
     return p
 
 
