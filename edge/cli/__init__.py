@@ -30,6 +30,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.config_cmd",
     "edge.cli.status",
     "edge.cli.doctor",
+    "export.score.cli",
 ]
 
 EPILOG = """\
