@@ -212,3 +212,69 @@ def evaluate_bundle(bundle: str | Path, tracks: list[Track], pitch_m: float, fra
     base = (baseline_errors(baseline, tracks, pitch_m, frame_stride=frame_stride, bodies=bodies, score_from=score_from)
             if baseline is not None else None)
     return summarise(model, base)
+
+
+README_BEGIN, README_END = "<!-- model-table:begin -->", "<!-- model-table:end -->"
+
+
+def protocols_markdown(results: dict[str, dict[str, Any]]) -> str:
+    """One overall row per protocol (name → a ``cavatar eval`` JSON), the model's own heading beside the
+    resolved one when the result has it, and the mean-pose baseline: the README's model table."""
+    lines = ["| protocol | heading " + METRIC_HEADER, "|---" * 11 + "|"]
+    for name, r in results.items():
+        o = r["overall"]
+        if "model_mpjpe_cm" in o:
+            lines.append(_row([name, "model alone"] + metric_cells(o, "model_")))
+        lines.append(_row([name, "resolved from the feet" if "model_mpjpe_cm" in o else "model alone"] + metric_cells(o)))
+        if "baseline" in r:
+            lines.append(_row([name, "mean pose at CoP (baseline)"] + metric_cells(r["baseline"])))
+    return "\n".join(lines) + "\n"
+
+
+def replace_block(text: str, block: str, begin: str = README_BEGIN, end: str = README_END) -> str:
+    """``text`` with what lies between the ``begin`` and ``end`` markers replaced by ``block``; ValueError without them."""
+    i, j = text.find(begin), text.find(end)
+    if i < 0 or j < i:
+        raise ValueError(f"no {begin} … {end} block to replace")
+    return text[:i + len(begin)] + "\n" + block + text[j:]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """python -m export.tables --readme README.md NAME=EVAL.json …: regenerate the README's model table."""
+    import argparse
+    import json
+    import sys
+
+    ap = argparse.ArgumentParser(prog="python -m export.tables", description=main.__doc__)
+    ap.add_argument("--readme", required=True, help="file holding the model-table block")
+    ap.add_argument("results", nargs="+", metavar="NAME=EVAL.json", help="a protocol's name and its `cavatar eval` JSON")
+    args = ap.parse_args(argv)
+    results, sources = {}, []
+    for item in args.results:
+        name, sep, path = item.partition("=")
+        if not sep:
+            print(f"error: expected NAME=EVAL.json, got {item!r}", file=sys.stderr)
+            return 2
+        try:
+            results[name] = json.loads(Path(path).read_text())
+        except (OSError, ValueError) as exc:
+            print(f"error: {path}: {exc}", file=sys.stderr)
+            return 2
+        s = results[name].get("setup", {})
+        sources.append(f"{name}: {s.get('bundle', '?')}, {s.get('protocol', '?')}; subjects {', '.join(s.get('subjects', []))}; "
+                       f"every {s.get('frame_stride', '?')}th frame; `{path}`")
+    readme = Path(args.readme)
+    try:
+        if not readme.is_file():
+            raise ValueError("no such file")
+        text = replace_block(readme.read_text(), protocols_markdown(results) + "\n" + "\n".join(f"- {x}" for x in sources) + "\n")
+    except ValueError as exc:
+        print(f"error: {readme}: {exc}", file=sys.stderr)
+        return 2
+    readme.write_text(text)
+    print(f"wrote the model table of {readme}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
