@@ -25,11 +25,12 @@ from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track
 
 GRID = {
-    "min_offset_mm": (3.0, 5.0),
-    "max_offset_mm": (15.0, 20.0, 30.0),
+    "min_offset_mm": (5.0,),
+    "max_offset_mm": (15.0, 20.0),
     "decay": (0.97, 0.99),
     "max_evidence": (10.0, 30.0),
     "min_evidence": (0.5, 1.5),
+    "hold_last": (0.0, 1.0),
 }
 
 

@@ -11,11 +11,10 @@ behind the blob's plain centroid (the heel carries more load than the forefoot),
 
 Per frame, every foot-like blob (area, length and elongation within the parameters, the feet
 carrying most of the person's force) whose offset is clear but not extreme (an extreme one is a
-forefoot or toes carrying the weight) gives a unit vote toward its toes; their sum is the frame's cue. Per track, :class:`HeadingResolver`
-sums the cues into evidence that the MODEL faces backwards (weighted by how reliable the cue is
-for the activity the model sees), and publishes the pose turned by Rz(π) while that evidence
-holds. Without a cue (a person lying, sitting, on their hands) the evidence decays and, until
-it does, keeps the body from flipping back and forth.
+forefoot or toes carrying the weight) gives a unit vote toward its toes; their sum is the frame's
+cue. Per track, :class:`HeadingResolver` accumulates the cues on the carpet (weighted by how
+reliable the cue is for the activity the model sees) and publishes the model's pose turned by
+Rz(π) when it faces away from them.
 
 Yaw convention: ``yaw(R)`` is the twist about carpet z of R · R0ᵀ, R0 = +90° about x (upright,
 facing −y; design.md), the same twist ``export.metrics.heading_error_rad`` measures. An upright
@@ -49,9 +48,10 @@ class HeadingParams:
     min_offset_mm: float = 5.0       # |centroid − CoP| along the long axis: below this no vote (noise) …
     max_offset_mm: float = 20.0      # … nor above this (a forefoot or a toe carrying the weight: bending, lunge)
     min_foot_share: float = 0.8      # the foot-like blobs must carry this share of the person's force
-    decay: float = 0.97              # per frame, of the track's summed evidence
-    max_evidence: float = 5.0        # the evidence is clipped to ±this
-    min_evidence: float = 0.3        # published turned when the evidence that the model faces backwards exceeds this
+    decay: float = 0.97              # per frame, of the track's summed evidence (a vector on the carpet)
+    max_evidence: float = 30.0       # its length is clipped to this
+    min_evidence: float = 0.5        # shorter evidence decides nothing
+    hold_last: float = 0.0           # 1: without evidence, keep the yaw published last (0: the model's)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "HeadingParams":
@@ -185,24 +185,23 @@ def _wrap(a):
 
 
 class HeadingResolver:
-    """One track's heading state: the evidence that the model faces backwards right now.
+    """One track's heading state: where the feet say the person faces, on the carpet.
 
-    The evidence is a scalar, relative to the model (not to the carpet), because the model's
-    mistake persists: it faces backwards for whole stretches while its yaw follows the person's
-    turns. Each frame with a foot cue adds ``weight · |cue| · −cos(model yaw − cue yaw)``
-    (positive: the model disagrees with the feet), ``weight`` being the cue's reliability for the
-    activity the model sees (``activity_weight``, 1 without one). The sum decays by ``decay`` per
-    frame and is clipped to ±``max_evidence`` so new evidence can overturn it. When the model's
-    own yaw jumps by more than 90° between two frames (it changed its mind; a person does not
-    turn that fast), the evidence changes sign with it, so the published body does not jump.
-    The pose is published turned when the evidence exceeds ``min_evidence``.
+    The evidence is a vector on the carpet: each frame adds its foot cue (unit votes toward the
+    toes) times the cue's reliability for the activity the model sees (``activity_weight``, 1
+    without one); the sum decays by ``decay`` per frame and its length is clipped to
+    ``max_evidence``, so a turn is followed within a few frames and one odd frame does not decide.
+    While the evidence is at least ``min_evidence`` long, a pose whose yaw is more than 90° from
+    it is published turned by Rz(π); the model's yaw (which may drift or swing on its own) keeps
+    all its precision otherwise. Without enough evidence the model's answer is published, or,
+    with ``hold_last`` = 1, the half turn nearest to the yaw published last (no 180° jumps).
     """
 
     def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None) -> None:
         self.params = params or HeadingParams()
         self.activity_weight = None if activity_weight is None else np.asarray(activity_weight, np.float64)
-        self.evidence = 0.0
-        self.last_model_yaw: float | None = None
+        self.evidence = np.zeros(2)
+        self.last_yaw: float | None = None
         self.flips = 0  # frames published turned
 
     def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
@@ -214,22 +213,22 @@ class HeadingResolver:
     def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None) -> np.ndarray:
         """:meth:`resolve` with the frame's cue (2,) already computed."""
         p = self.params
+        weight = 1.0
+        if self.activity_weight is not None and activity_probs is not None:
+            weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
+        e = self.evidence * p.decay + weight * np.asarray(cue, np.float64)
+        length = float(np.hypot(e[0], e[1]))
+        if length > p.max_evidence:
+            e, length = e * (p.max_evidence / length), p.max_evidence
+        self.evidence = e
         yaw = float(yaw_rad(np.asarray(pose_aa[:3])))
-        if self.last_model_yaw is not None and abs(_wrap(yaw - self.last_model_yaw)) > np.pi / 2:
-            self.evidence = -self.evidence
-        self.last_model_yaw = yaw
-        strength = float(np.hypot(cue[0], cue[1]))
-        vote = 0.0
-        if strength > 0:
-            weight = 1.0
-            if self.activity_weight is not None and activity_probs is not None:
-                weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
-            vote = -weight * strength * np.cos(yaw - cue_yaw_rad(cue))
-        self.evidence = float(np.clip(self.evidence * p.decay + vote, -p.max_evidence, p.max_evidence))
-        if self.evidence > p.min_evidence:
+        ref = cue_yaw_rad(e) if length >= p.min_evidence else (self.last_yaw if p.hold_last else None)
+        out = np.asarray(pose_aa)
+        if ref is not None and abs(_wrap(yaw - ref)) > np.pi / 2:
+            out, yaw = turn_half(out), float(_wrap(yaw + np.pi))
             self.flips += 1
-            return turn_half(pose_aa)
-        return np.asarray(pose_aa)
+        self.last_yaw = yaw
+        return out
 
 
 def resolve_sequence(pose_aa: np.ndarray, cues: np.ndarray, activity_probs: np.ndarray | None,

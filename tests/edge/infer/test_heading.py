@@ -82,6 +82,28 @@ def test_the_resolver_turns_a_backwards_body_and_keeps_a_right_one():
     assert yaw_rad(fresh.decide(upright(2.5), np.zeros(2))[:3]) == pytest.approx(2.5, abs=1e-5)
 
 
+def test_without_evidence_hold_last_keeps_the_published_half_turn():
+    for hold, expect in ((1.0, 0.1), (0.0, 0.1 + np.pi)):
+        r = HeadingResolver(HeadingParams(decay=0.5, max_evidence=5.0, min_evidence=0.5, hold_last=hold))
+        for _ in range(5):
+            r.resolve(upright(0.1), feet("up"), PITCH)
+        for _ in range(10):  # the feet go quiet, the evidence fades, the model keeps its answer
+            out = r.decide(upright(0.1), np.zeros(2))
+        out = r.decide(upright(0.1 + np.pi), np.zeros(2))  # … then swings round
+        assert abs(((yaw_rad(out[:3]) - expect) + np.pi) % (2 * np.pi) - np.pi) < 1e-5
+
+
+def test_a_turning_person_is_followed():
+    r = HeadingResolver(HeadingParams(decay=0.8, max_evidence=5.0, min_evidence=0.5))
+    rot = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90° on the carpet
+    for _ in range(10):
+        r.resolve(upright(0.0), feet("up"), PITCH)
+    for _ in range(15):  # now facing yaw +90°: feet toward +x; the model says so too, then backwards
+        r.decide(upright(np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
+    out = r.decide(upright(-np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
+    assert yaw_rad(out[:3]) == pytest.approx(np.pi / 2, abs=1e-5)
+
+
 def test_activity_weights_silence_the_cue_where_it_is_not_trusted():
     params = HeadingParams(min_evidence=0.3)
     weights = np.array([1.0, 0.0])
