@@ -180,6 +180,8 @@ class ModelSection:
     bundle: str = _f("", "model bundle folder; empty: the shipped bundle (edge/models/lean-96)")
     threads: int = _f(1, "onnxruntime intra-op threads per model (1 suits a 2-core board: the reader and "
                          "publisher threads need the other core)", _between(1, 64))
+    resolve_heading: bool = _f(True, "turn a body the model publishes facing backwards (180° about the vertical) when "
+                                     "the feet's pressure says so, per track (edge/infer/heading.py)")
 
 
 @dataclass(frozen=True)

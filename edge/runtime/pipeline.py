@@ -148,7 +148,8 @@ class Runtime:
             scene = SceneTracker(grid[0], grid[1], cal.pitch_m, cfg.scene)
             self.stages = FrameStages(calibrated, scene, self.bundle, device=cfg.device.id, times=self.times,
                                       counters=self.counters, invalid=self.invalid,
-                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._seq_start)
+                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._seq_start,
+                                      resolve_heading=cfg.model.resolve_heading)
             status = cfg.status_path()
             try:
                 status.parent.mkdir(parents=True, exist_ok=True)
