@@ -112,7 +112,7 @@ class Renderer:
         self.tissue = tissue_stiffness(self.body)
 
     def render(self, plan: Plan, subject_list: list[Any]) -> dict[str, np.ndarray]:
-        from sim.contact import mesh_centroid_m, subject_mass_kg
+        from sim.contact.track import track_contacts, track_dynamics
         from sim.motion import scene
         from sim.sensor import CarpetSensor, FrameStream, StreamConfig
 
@@ -128,17 +128,10 @@ class Renderer:
             "betas": np.zeros((n, p_max, 10), np.float32), "transl_m": np.zeros((n, p_max, 3), np.float32),
             "joints_m": np.zeros((n, p_max, 24, 3), np.float32),
         }
-        dt = 1.0 / self.rate_hz
         for slot, (track, subj_index) in enumerate(zip(sc.tracks, plan.subjects)):
-            betas = np.broadcast_to(track.betas, (n, len(track.betas)))
-            fw = self.body.forward(track.pose_aa, betas, track.transl_m, vertices=True)
-            verts, joints = fw["vertices"], fw["joints"]
-            mass = subject_mass_kg(self.body, track.betas)
-            com = np.stack([mesh_centroid_m(v, self.body.faces) for v in verts])
-            acc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0)
-            for t in range(n):
-                res = self.contact.pressure_kpa(verts[t], self.body.faces, mass, acc_z_m_s2=float(acc[t, 2]), com_m=com[t],
-                                                acc_xy_m_s2=acc[t, :2], tissue_kpa_per_mm=self.tissue)
+            fw, dyn = track_dynamics(self.body, track)
+            joints = fw["joints"]
+            for t, res in enumerate(track_contacts(self.contact, self.body, self.tissue, track, fw, dyn)):
                 pressure[t] += res.pressure_kpa
             out["present"][:, slot] = True
             out["subject"][:, slot] = subj_index
