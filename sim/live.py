@@ -143,7 +143,7 @@ class LiveCarpet:
                  rate_hz: float = 14.0, adc_bits: int = 12, chunk_s: float = 10.0, body: str = "lite",
                  activities: tuple[str, ...] = PAPER_ACTIVITIES + ("walking",), prefetch: bool = False) -> None:
         from edge.body import BodyModel
-        from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
+        from sim.contact import ContactModel, subject_mass_kg, regional_tissue
         from sim.motion import Subject
 
         if rows != cols or rows not in (96, 48, 32):
@@ -157,7 +157,7 @@ class LiveCarpet:
         self.body_name = body
         self.body = BodyModel.load(body)
         self.contact = ContactModel(rows, cols, pitch_m=self.pitch_m)
-        self.tissue = tissue_stiffness(self.body)
+        self.tissue = regional_tissue(self.body)
         self.subjects = [Subject.random(i, seed * 1000 + i) for i in range(people)]
         self.mass_kg = [subject_mass_kg(self.body, s.betas) for s in self.subjects]
         self.sensor = live_sensor(seed, rows, adc_bits, pitch_mm)

@@ -18,18 +18,18 @@ AUDIT_ACTIVITIES = ("stepping", "bending", "turning", "squat", "twisting", "rais
                     "sit_up", "walking")
 
 
-def run_audit(subjects: int = 3, seconds: float = 8.0, seed: int = 0, activities=AUDIT_ACTIVITIES, spread_subjects: int = 8,
+def run_audit(subjects: int = 3, seconds: float = 12.0, seed: int = 0, activities=AUDIT_ACTIVITIES, spread_subjects: int = 8,
               progress=None) -> dict:
     from edge.body import BodyModel
     from sim.audit import checks as ck
     from sim.audit.measure import measure_activity
-    from sim.contact import ContactModel, tissue_stiffness
+    from sim.contact import ContactModel, regional_tissue
     from sim.motion import ACTIVITIES
 
     t0 = time.monotonic()
     body = BodyModel.load("lite")
     carpet = ContactModel(96, 96, pitch_m=0.01905)
-    tissue = tissue_stiffness(body)
+    tissue = regional_tissue(body)
     labels = {a: ACTIVITIES.index(a) for a in ACTIVITIES}
     standing = labels["standing"]
     results, out = {}, []

@@ -25,7 +25,8 @@ _REGION_JOINTS = {
     "back": ("spine1", "spine2", "spine3", "left_collar", "right_collar", "neck"),
 }
 MIDFOOT = (0.30, 0.60)  # midfoot: 30–60 % of the foot's length from the heel (three-region mask)
-STILL_SPEED_M_S = 0.08  # every joint slower than this: a still frame
+STILL_SPEED_M_S = 0.08  # every joint slower than this and the COM's acceleration
+STILL_ACC_M_S2 = 0.3  # below this: a still frame
 
 
 def vertex_regions(body) -> np.ndarray:
@@ -55,7 +56,7 @@ class Frames:
     foot_midfoot: list = field(default_factory=list)  # (2,) midfoot share of each foot's load
     foot_force: list = field(default_factory=list)  # (2,) each foot's force / (m·g)
     com_xy: list = field(default_factory=list)
-    foot_hull_dist: list = field(default_factory=list)  # (2,) COM distance outside each foot's contact hull, m
+    foot_hull_dist: list = field(default_factory=list)  # (2,) ZMP distance outside each foot's contact hull, m
     segment: list = field(default_factory=list)  # (subject, frame) of each entry
 
 
@@ -83,7 +84,7 @@ def measure_track(frames: Frames, carpet, body, tissue, track, regions: np.ndarr
     for t, res in enumerate(results):
         frames.label.append(int(track.activity[t]))
         frames.segment.append((subject, t))
-        frames.still.append(bool(speed[t] < STILL_SPEED_M_S))
+        frames.still.append(bool(speed[t] < STILL_SPEED_M_S and np.linalg.norm(dyn.acc_m_s2[t]) < STILL_ACC_M_S2))
         frames.force_ratio.append(res.force_total_n / mg)
         frames.com_xy.append(dyn.com_m[t, :2])
         frames.peak_sensel_kpa.append(float(res.pressure_kpa.max()))
@@ -110,6 +111,8 @@ def measure_track(frames: Frames, carpet, body, tissue, track, regions: np.ndarr
         frames.share.append(np.array([f[reg == r].sum() / total for r in range(len(REGIONS))]))
         frames.peak_fine_kpa.append(np.array([p[reg == r].max() if (reg == r).any() else 0.0 for r in range(len(REGIONS))]))
         frames.com_in_support.append(_hull_distance(xy, dyn.com_m[t, :2]) <= 0.005)
+        # zero-moment point: where the COP must be for this COM acceleration (the solver's target)
+        zmp = dyn.com_m[t, :2] - dyn.com_m[t, 2] * dyn.acc_m_s2[t, :2] / max(G_M_S2 + dyn.acc_m_s2[t, 2], 1e-6)
         cop, mid, ff, hd = nan2.copy(), nan2.copy(), np.zeros(2), np.full(2, np.inf)
         for k, name in enumerate(("left", "right")):
             on = reg == REGIONS.index(f"{name}_foot")
@@ -124,7 +127,7 @@ def measure_track(frames: Frames, carpet, body, tissue, track, regions: np.ndarr
             frac = (xy[on] @ axis - heel) / max(toe - heel, 1e-6)
             cop[k] = float((frac * f[on]).sum() / f[on].sum())
             mid[k] = float(f[on][(frac >= MIDFOOT[0]) & (frac < MIDFOOT[1])].sum() / f[on].sum())
-            hd[k] = _hull_distance(xy[on], dyn.com_m[t, :2])
+            hd[k] = _hull_distance(xy[on], zmp)
         frames.foot_cop.append(cop), frames.foot_midfoot.append(mid), frames.foot_force.append(ff)
         frames.foot_hull_dist.append(hd)
 

@@ -109,7 +109,7 @@ class ContactModel:
         max_band_mm: float = 150.0,
         contact_kpa: float = 0.5,
         max_gap_mm: float = 30.0,
-        max_slope: float = 0.15,
+        max_slope: float = 0.25,
         g_m_s2: float = G_M_S2,
         default_tissue_kpa_per_mm: float = 2.0,
     ):

@@ -1,5 +1,7 @@
 """One person's whole track through the contact physics: posing, centre of mass, its
-acceleration, and the pressure of every frame. The dataset generator and ``sim audit``
+acceleration, and the pressure of every frame. The centre of mass comes from the segment
+mass model (``sim.contact.segments``), which does not change with pose; its acceleration
+is the second derivative of a local cubic fit (Savitzky–Golay, 0.5 s). The dataset generator and ``sim audit``
 both call this, so the audit measures exactly what the training data holds.
 
     fw, dyn = track_dynamics(body, track)          # posed joints/vertices, mass, COM, acceleration
@@ -12,7 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.contact.mesh import mesh_centroid_m, subject_mass_kg
+from scipy.signal import savgol_filter
+
+from sim.contact.mesh import subject_mass_kg
+from sim.contact.segments import SegmentMassModel
+
+ACC_WINDOW = 7  # frames (0.5 s at 14 Hz) of the smoothed second derivative
 
 
 @dataclass
@@ -31,8 +38,11 @@ def track_dynamics(body, track, fw=None) -> tuple[dict, TrackDynamics]:
         fw = body.forward(track.pose_aa, np.broadcast_to(track.betas, (n, len(track.betas))), track.transl_m, vertices=True)
     dt = 1.0 / track.rate_hz
     mass = subject_mass_kg(body, track.betas)
-    com = np.stack([mesh_centroid_m(v, body.faces) for v in fw["vertices"]])
-    acc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0)
+    com = SegmentMassModel(body, track.betas).com_m(track.pose_aa, track.transl_m)
+    if n >= ACC_WINDOW:  # a local cubic over ACC_WINDOW frames: finite differences amplify the motion's jitter
+        acc = savgol_filter(com, ACC_WINDOW, 3, deriv=2, delta=dt, axis=0, mode="interp")
+    else:
+        acc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0) if n >= 2 else np.zeros_like(com)
     return fw, TrackDynamics(mass, com, acc)
 
 

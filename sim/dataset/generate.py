@@ -104,12 +104,12 @@ class Renderer:
 
     def __init__(self, grid: int, pitch_m: float, rate_hz: float, adc_bits: int, body: str = "lite") -> None:
         from edge.body import BodyModel
-        from sim.contact import ContactModel, tissue_stiffness
+        from sim.contact import ContactModel, regional_tissue
 
         self.grid, self.pitch_m, self.rate_hz, self.adc_bits = grid, pitch_m, rate_hz, adc_bits
         self.body = BodyModel.load(body)
         self.contact = ContactModel(grid, grid, pitch_m=pitch_m)
-        self.tissue = tissue_stiffness(self.body)
+        self.tissue = regional_tissue(self.body)
 
     def render(self, plan: Plan, subject_list: list[Any]) -> dict[str, np.ndarray]:
         from sim.contact.track import track_contacts, track_dynamics

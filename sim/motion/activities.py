@@ -55,10 +55,13 @@ def _reps(tl: Timeline, rep, seconds_left: float, rng, min_reps=1):
     d0 = tl.duration_s
     rep(tl)
     per = tl.duration_s - d0
-    n = max(min_reps, int(round(seconds_left / max(per, 1e-3))))
+    n = max(min_reps, int(seconds_left / max(per, 1e-3) + 0.1))  # whole repetitions at the subject's own tempo
     for _ in range(n - 1):
         rep(tl)
     return n0
+
+
+MAX_STRETCH = 1.12  # an activity's keys last at most this much longer than the subject's tempo makes them
 
 
 def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 0.9)):
@@ -68,8 +71,16 @@ def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 
     a, b = min(a, 0.15 * seconds), min(b, 0.15 * seconds)
     tl.add(a, BASE, FEET, LF, label=STANDING)
     first = len(tl.keys)
-    body(tl, seconds - a - b)
-    tl.scale_to(seconds - b, fixed=first)
+    slot = seconds - a - b
+    body(tl, slot)
+    # Keep the activity's own tempo: stretch by at most MAX_STRETCH and stand for the rest
+    # (squeezing is unavoidable when even one repetition does not fit).
+    took = tl.duration_s - a
+    stretch = min(slot / max(took, 1e-9), MAX_STRETCH)
+    tl.scale_to(a + took * stretch, fixed=first)
+    rest = slot - took * stretch
+    if rest > 1e-6:  # a pause before the next activity, still part of this one (repetitions end in pauses too)
+        tl.add(rest, BASE, FEET, LF, label=label)
     tl.add(b, BASE, FEET, LF, label=STANDING)
     return tl
 
@@ -129,7 +140,7 @@ def bending(style, rng, seconds, label):
                         left_shoulder=(-95, 0, -80), right_shoulder=(-95, 0, 80))
             side = _u(rng, -6, 6)
             down[J["spine2"], 1] = side  # a little twist to one side
-            d = 1.4 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 2.6 * style.tempo * _u(rng, 0.85, 1.15)
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.6), styled(down, style, a * 1.03), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
@@ -149,7 +160,7 @@ def squat(style, rng, seconds, label):
                 down = pose(down, left_shoulder=(0, -75, 0), right_shoulder=(0, 75, 0), left_elbow=(0, -5, 0), right_elbow=(0, 5, 0))
             else:  # hands together in front of the chest
                 down = pose(down, left_shoulder=(0, -45, -55), right_shoulder=(0, 45, 55), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0))
-            d = 1.5 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 3.0 * style.tempo * _u(rng, 0.85, 1.15)
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.5), styled(down, style, a), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
@@ -219,9 +230,9 @@ def lunge(style, rng, seconds, label):
             t.add(0.40 * tm, styled(split, style), contacts(back), back, heel=heel_split, label=label)
             t.add(0.10 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
             for _ in range(int(rng.integers(1, 3))):
-                t.add(0.8 * tm, deep, FEET, back, heel=heel_deep, label=label)
+                t.add(1.3 * tm, deep, FEET, back, heel=heel_deep, label=label)
                 t.add(_u(rng, 0.1, 0.4), deep, FEET, back, heel=heel_deep, label=label)
-                t.add(0.8 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
+                t.add(1.3 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
             t.add(0.45 * tm, styled(lift, style), contacts(back), back, label=label)
             t.add(0.40 * tm, BASE, contacts(back), back, label=label)
             t.add(0.3 * tm, BASE, FEET, back, label=label)
@@ -245,16 +256,16 @@ SIT_LONG = pose(root=(-8, 0, 0), left_hip=(-88, 0, 6), right_hip=(-88, 0, -6),
 
 def _get_down(tl, style, label, end_pose, end_contact, end_anchor):
     tm = style.tempo
-    tl.add(0.9 * tm, SQUAT_LOW, FEET, LF, label=label)
-    tl.add(0.8 * tm, end_pose, FEET, SETTLE, label=label)  # the buttocks come down onto the floor
+    tl.add(1.6 * tm, SQUAT_LOW, FEET, LF, label=label)
+    tl.add(1.3 * tm, end_pose, FEET, SETTLE, label=label)  # the buttocks come down onto the floor
     tl.add(0.2 * tm, end_pose, end_contact, end_anchor, label=label)
 
 
 def _get_up(tl, style, label, from_pose, from_contact, from_anchor):
     tm = style.tempo
     tl.add(0.2 * tm, from_pose, from_contact, from_anchor, label=label)
-    tl.add(0.8 * tm, SQUAT_LOW, FEET, SETTLE, label=label)  # weight back onto the feet
-    tl.add(0.9 * tm, BASE, FEET, LF, label=label)
+    tl.add(1.3 * tm, SQUAT_LOW, FEET, SETTLE, label=label)  # weight back onto the feet
+    tl.add(1.6 * tm, BASE, FEET, LF, label=label)
 
 
 def sitting(style, rng, seconds, label):
@@ -277,7 +288,7 @@ def sitting(style, rng, seconds, label):
             t.add(0.5 * d, styled(p, style, 1.0, SIT_BENT), sit, BUTT, label=label)
             t.add(_u(rng, 0.3, 1.0), styled(p, style, 1.0, SIT_BENT), sit, BUTT, label=label)
             t.add(0.5 * d, SIT_BENT, sit, BUTT, label=label)
-        _reps(tl, rep, left - 5.0 * style.tempo, rng)
+        _reps(tl, rep, left - 6.4 * style.tempo, rng)
         _get_up(tl, style, label, SIT_BENT, sit, BUTT)
     return _frame(style, rng, seconds, label, body)
 
@@ -298,19 +309,19 @@ def sit_up(style, rng, seconds, label):
 
     def body(tl, left):
         _get_down(tl, style, label, SIT_BENT, sit, BUTT)
-        tl.add(1.0 * style.tempo, LIE_BENT, sit, BUTT, label=label)
+        tl.add(1.6 * style.tempo, LIE_BENT, sit, BUTT, label=label)
         tl.add(0.2, LIE_BENT, lie, BUTT, label=label)
 
         def rep(t):
             a = _u(rng, 0.75, 1.05)
             up = styled(CURL_UP, style, a, LIE_BENT)
-            d = 1.5 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 2.6 * style.tempo * _u(rng, 0.85, 1.15)
             t.add(0.5 * d, up, sit, BUTT, label=label)
             t.add(_u(rng, 0.05, 0.3), up, sit, BUTT, label=label)
             t.add(0.5 * d, LIE_BENT, sit, BUTT, label=label)
             t.add(_u(rng, 0.1, 0.5), LIE_BENT, lie, BUTT, label=label)
-        _reps(tl, rep, left - 7.0 * style.tempo, rng)
-        tl.add(1.0 * style.tempo, SIT_BENT, sit, BUTT, label=label)
+        _reps(tl, rep, left - 9.6 * style.tempo, rng)
+        tl.add(1.6 * style.tempo, SIT_BENT, sit, BUTT, label=label)
         _get_up(tl, style, label, SIT_BENT, sit, BUTT)
     return _frame(style, rng, seconds, label, body)
 
@@ -337,8 +348,8 @@ def push_up(style, rng, seconds, label):
 
     def body(tl, left):
         tm = style.tempo
-        tl.add(0.9 * tm, SQUAT_LOW, FEET, LF, label=label)
-        tl.add(0.7 * tm, CROUCH_HANDS, FEET, LF, label=label)
+        tl.add(1.6 * tm, SQUAT_LOW, FEET, LF, label=label)
+        tl.add(1.0 * tm, CROUCH_HANDS, FEET, LF, label=label)
         tl.add(0.2 * tm, CROUCH_HANDS, four, LH, label=label)
         tl.add(0.25 * tm, HOP, hands, LH, heel=(30, 30), label=label)
         tl.add(0.25 * tm, PLANK, hands, LH, heel=toes, label=label)
@@ -347,19 +358,19 @@ def push_up(style, rng, seconds, label):
         def rep(t):
             a = _u(rng, 0.7, 1.0)
             down = PLANK + (PLANK_DOWN - PLANK) * a * min(style.amplitude, 1.0)
-            d = 1.3 * tm * _u(rng, 0.85, 1.15)
+            d = 2.2 * tm * _u(rng, 0.85, 1.15)
             t.add(0.5 * d, down, four, LF, heel=toes, label=label)
             t.add(_u(rng, 0.05, 0.3), down, four, LF, heel=toes, label=label)
             t.add(0.5 * d, PLANK, four, LF, heel=toes, label=label)
             t.add(_u(rng, 0.1, 0.5), PLANK, four, LF, heel=toes, label=label)
-        _reps(tl, rep, left - 5.0 * tm, rng)
+        _reps(tl, rep, left - 7.0 * tm, rng)
         tl.add(0.2 * tm, PLANK, four, LF, heel=toes, label=label)
         tl.add(0.25 * tm, HOP, hands, LH, heel=(30, 30), label=label)
         tl.add(0.25 * tm, CROUCH_HANDS, hands, LH, label=label)
         tl.add(0.3 * tm, CROUCH_HANDS, four, LH, label=label)
         tl.add(0.2 * tm, CROUCH_HANDS, FEET, LF, label=label)
-        tl.add(0.7 * tm, SQUAT_LOW, FEET, LF, label=label)
-        tl.add(0.9 * tm, BASE, FEET, LF, label=label)
+        tl.add(1.0 * tm, SQUAT_LOW, FEET, LF, label=label)
+        tl.add(1.6 * tm, BASE, FEET, LF, label=label)
     return _frame(style, rng, seconds, label, body)
 
 

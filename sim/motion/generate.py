@@ -251,7 +251,10 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     toe = np.radians(style.toe_out_deg)
     foot_yaw = np.stack([heading + toe, heading - toe], 1)
     hand_rot = _flat_hands(heading)
-    transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy)
+    balance = lab != ACTIVITIES.index("walking")  # walking balances dynamically, step to step
+    seated = lab == ACTIVITIES.index("sitting")
+    transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
+                        seated=seated)
     pose_aa = matrix_to_rotvec(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
 

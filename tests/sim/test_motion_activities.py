@@ -7,7 +7,7 @@ import pytest
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, box_gaps, person_track, scene
-from sim.motion.rig import LOCK_JOINT, Rig
+from sim.motion.rig import _SACRUM_DROP, LOCK_JOINT, Rig
 
 RATE = 14.0
 SECONDS = 8.0
@@ -71,7 +71,10 @@ def test_scheduled_contacts_touch_the_floor(tracks, name):
         on = tr.contact[:, p]
         if on.any():
             low = v[on][:, rig.part_vertices[p], 2].min(1)
-            assert low.max() < 0.015, f"{CONTACT_PARTS[p]} scheduled on the floor but {low.max() * 100:.1f} cm up"
+            # Supine, the heavy pelvis sinks deeper into its soft tissue than the back (rig._SACRUM_DROP):
+            # the back's rigid surface may stay up to that much higher; the contact physics loads both.
+            limit = 0.015 + (_SACRUM_DROP if CONTACT_PARTS[p] == "back" else 0.0)
+            assert low.max() < limit, f"{CONTACT_PARTS[p]} scheduled on the floor but {low.max() * 100:.1f} cm up"
 
 
 @pytest.mark.parametrize("name", NAMES)
