@@ -35,6 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     g.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     g.add_argument("--activities", default=None, help="comma-separated subset of the activities (default: the paper's ten)")
+    g.add_argument("--calibration", choices=("installer", "truth"), default=None,
+                   help="also write each carpet's calibration: the guided procedure acted out on it (installer) or its "
+                   "true parameters (truth), so training and evaluation can read counts → calibration → kPa")
     g.set_defaults(func=run_generate)
     sh = s.add_parser("show", help="draw one frame: raw counts, true pressure and the bodies",
                       description="Draw frame I of a dataset to a PNG: raw counts, true pressure, bodies from above and the side.")
@@ -63,7 +66,8 @@ def run_generate(args: argparse.Namespace) -> int:
         raise CliError("--subjects must be at least 1")
     try:
         out = generate(args.out, subjects=args.subjects, seconds_per_activity=args.seconds_per_activity, people=args.people,
-                       grid=args.grid, pitch_mm=pitch, seed=args.seed, activities=acts, workers=args.workers)
+                       grid=args.grid, pitch_mm=pitch, seed=args.seed, activities=acts, workers=args.workers,
+                       calibration=args.calibration)
     except (DatasetError, ValueError) as exc:
         raise CliError(str(exc)) from None
     from sim.dataset import Dataset

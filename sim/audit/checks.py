@@ -52,7 +52,7 @@ def physics_checks(activity: str, frames, label_index: int, standing_index: int)
     fr = a["force_ratio"][own]
     out.append(_check(f"force.{activity}", f"{activity}: frames with force within {lo}–{hi} × mg", _pct((fr >= lo) & (fr <= hi)),
                       "%", 95, 100, SRC_FORCE))
-    out.append(_check(f"balance.{activity}", f"{activity}: contact solves whose COP target is reachable",
+    out.append(_check(f"balance.{activity}", f"{activity}: contact solves whose COP target is reachable (within 5 mm)",
                       _pct(a["target_ok"][own]), "%", 99, 100, SRC_BALANCE))
     still = own & a["still"]
     if still.any():  # stepping and walking never stand still

@@ -25,6 +25,7 @@ from scipy.linalg import solve_banded
 
 FOOT_COP_FRAC = 0.43  # standing COP along the foot from the heel (40–45 % in plantar-pressure studies)
 TOES_COP_FRAC = 0.78  # on a raised heel the COP sits under the metatarsal heads
+HEEL_COP_FRAC = 0.12  # toes up (heel strike): under the heel
 G_M_S2 = 9.81
 
 
@@ -38,11 +39,11 @@ def foot_geometry(rest_vertices: np.ndarray, foot_vertices: np.ndarray, ankle: n
     return u, float(proj.min()), float(proj.max())
 
 
-def support_point(ball_w: np.ndarray, foot_rot: np.ndarray, geometry, on_toes: np.ndarray) -> np.ndarray:
+def support_point(ball_w: np.ndarray, foot_rot: np.ndarray, geometry, heel_rad: np.ndarray) -> np.ndarray:
     """(T,2) ground point of a foot's COP: ball_w (T,3) world ball joint, foot_rot (T,3,3) the
-    ankle's world orientation, on_toes (T,) bool."""
+    ankle's world orientation, heel_rad (T,) heel raise (> 10°: on the toes, < −3°: on the heel)."""
     u, heel, toe = geometry
-    frac = np.where(on_toes, TOES_COP_FRAC, FOOT_COP_FRAC)
+    frac = np.where(heel_rad > np.radians(10.0), TOES_COP_FRAC, np.where(heel_rad < np.radians(-3.0), HEEL_COP_FRAC, FOOT_COP_FRAC))
     off = heel + frac * (toe - heel)
     return (ball_w + (foot_rot @ u) * off[:, None])[:, :2]
 

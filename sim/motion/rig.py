@@ -369,14 +369,17 @@ class Rig:
             target = table[inv]
             if q in (LF, RF):  # the ball's height follows the heel raise (sole or toes on the floor)
                 on = c[frames]
-                zf = np.where(heel[frames, q] > 0, lock_local[frames, q, 2] - part_low[frames, q], self.ball_height[q])
+                zf = np.where(heel[frames, q] != 0, lock_local[frames, q, 2] - part_low[frames, q], self.ball_height[q])
                 # One ball height per contact span, the middle of what the heel raise asks for: the
                 # ball stays put while the toes or the sole stay within a few mm of the floor.
-                sid = np.unique(span0[on], return_inverse=True)[1]
+                rock = on & (heel[frames, q] < 0)  # heel strike (toes up): the foot rolls on its heel,
+                sole = on & ~rock                  # the ball comes down frame by frame
+                sid = np.unique(span0[sole], return_inverse=True)[1]
                 lo, hi = np.full(sid.max() + 1 if len(sid) else 0, np.inf), np.full(sid.max() + 1 if len(sid) else 0, -np.inf)
-                np.minimum.at(lo, sid, zf[on])
-                np.maximum.at(hi, sid, zf[on])
-                target[on, 2] = 0.5 * (lo + hi)[sid]
+                np.minimum.at(lo, sid, zf[sole])
+                np.maximum.at(hi, sid, zf[sole])
+                target[sole, 2] = 0.5 * (lo + hi)[sid]
+                target[rock, 2] = zf[rock]
                 target = target - np.einsum("nij,j->ni", foot_rot[q][frames], self.foot_vec[q])
             solve[q] = (frames, weight[frames], target, c[frames])
 
@@ -480,7 +483,7 @@ class Rig:
             if desired is None:
                 p = com.copy()
                 pts = {q: support_point(transl + g_t[:, LOCK_JOINT[q]], foot_rot[q], self.foot_geometry[q],
-                                        heel[:, q] > np.radians(10.0)) for q in (LF, RF)}
+                                        heel[:, q]) for q in (LF, RF)}
                 both = feet_only & feet.all(1)
                 p[both] = 0.5 * (pts[LF][both] + pts[RF][both])
                 for q, other in ((LF, RF), (RF, LF)):

@@ -29,7 +29,8 @@ NAMES = [a for a in ACTIVITIES if a != "standing"]
 
 
 def span_drift(track: Track, joints: np.ndarray, part: int) -> float:
-    """Largest distance a locked point moves from where its contact span began."""
+    """Largest horizontal distance a locked point moves from where its contact span began (it may
+    rise: a foot rolling from its heel onto its sole lowers its ball onto the floor)."""
     c = track.contact[:, part]
     pts = joints[:, LOCK_JOINT[part]]
     worst, start = 0.0, None
@@ -37,7 +38,7 @@ def span_drift(track: Track, joints: np.ndarray, part: int) -> float:
         if c[t] and (t == 0 or not c[t - 1]):
             start = pts[t]
         if c[t]:
-            worst = max(worst, float(np.linalg.norm(pts[t] - start)))
+            worst = max(worst, float(np.linalg.norm(pts[t, :2] - start[:2])))
     return worst
 
 
