@@ -45,7 +45,10 @@ Method (details, numbers and limitations in docs/sim-contact.md):
 
 Mass comes from the mesh volume (divergence theorem) of the subject's zero pose at
 1010 kg/m³ (``subject_mass_kg``, ``body_mass_kg``, ``mesh_report``); the COM from the
-posed mesh's volume centroid unless given.
+posed mesh's volume centroid unless given. Whole tracks (``track.track_dynamics`` /
+``track_contacts``, what the dataset generator uses) give it the COM of the segment mass
+model (``segments.SegmentMassModel``, de Leva), which does not change with pose, and a
+smoothed acceleration; ``tissue.regional_tissue`` sets stiffness by region.
 """
 
 from sim.contact.mesh import (

@@ -12,7 +12,9 @@ vertex weights that fade smoothly (the lite mesh has 3–5 cm edges):
   the supine body);
 - everything else keeps its part's value.
 
-Stiffness is kPa per mm of indentation of tissue and rug in series (Winkler layer).
+Stiffness is kPa per mm of indentation of tissue and rug in series (Winkler layer); the
+contact model interpolates its inverse (compliance) across a triangle, so a soft vertex
+stays soft between stiff neighbours.
 Values were fitted so that the audit's plantar, sitting and lying checks land in their
 published ranges (see docs/sim-contact.md and ``cavatar sim audit``).
 """
@@ -25,10 +27,10 @@ from sim.contact.mesh import TISSUE_KPA_PER_MM, tissue_stiffness
 
 # Foot zones by fraction of the foot's length from the heel: (start, end, kPa/mm medial, kPa/mm lateral).
 FOOT_ZONES = (
-    (0.00, 0.24, 60.0, 60.0),  # heel pad
-    (0.24, 0.68, 0.05, 0.3),   # midfoot: medial longitudinal arch, lateral band (vertex zones are wider than
-    (0.68, 0.88, 8.0, 8.0),    # metatarsal heads                              the 30–60 % mask: the raster
-    (0.88, 1.01, 3.0, 3.0),    # toes                                          interpolates between vertices)
+    (0.00, 0.24, 11.0, 11.0),  # heel pad
+    (0.24, 0.68, 0.05, 0.3),   # midfoot: medial longitudinal arch, lateral band
+    (0.68, 0.88, 8.0, 8.0),    # metatarsal heads
+    (0.88, 1.01, 3.0, 3.0),    # toes
 )
 # Bony prominences: centre in the template relative to a joint (m), Gaussian radius (m), kPa/mm.
 PROMINENCES = {

@@ -263,9 +263,15 @@ SIT_LONG = pose(root=(-8, 0, 0), left_hip=(-88, 0, 6), right_hip=(-88, 0, -6),
                 left_shoulder=(-30, 0, -70), right_shoulder=(-30, 0, 70), left_elbow=(0, -30, 0), right_elbow=(0, 30, 0))
 
 
+def crouch(p: np.ndarray, style) -> np.ndarray:
+    """A deep template (crouch, squat to the floor) as deep as this person goes: shallower for a
+    small range of motion, never deeper than the template (knees would pass 150°)."""
+    return styled(p, style, min(1.0, 1.0 / style.amplitude) if style.amplitude > 1.0 else 1.0)
+
+
 def _get_down(tl, style, label, end_pose, end_contact, end_anchor):
     tm = style.tempo
-    tl.add(1.6 * tm, SQUAT_LOW, FEET, LF, label=label)
+    tl.add(1.6 * tm, crouch(SQUAT_LOW, style), FEET, LF, label=label)
     tl.add(1.3 * tm, end_pose, FEET, SETTLE, label=label)  # the buttocks come down onto the floor
     tl.add(0.2 * tm, end_pose, end_contact, end_anchor, label=label)
 
@@ -273,7 +279,7 @@ def _get_down(tl, style, label, end_pose, end_contact, end_anchor):
 def _get_up(tl, style, label, from_pose, from_contact, from_anchor):
     tm = style.tempo
     tl.add(0.2 * tm, from_pose, from_contact, from_anchor, label=label)
-    tl.add(1.3 * tm, SQUAT_LOW, FEET, SETTLE, label=label)  # weight back onto the feet
+    tl.add(1.3 * tm, crouch(SQUAT_LOW, style), FEET, SETTLE, label=label)  # weight back onto the feet
     tl.add(1.6 * tm, BASE, FEET, LF, label=label)
 
 
@@ -354,15 +360,16 @@ _TOES = 72.0
 def push_up(style, rng, seconds, label):
     """Down to a crouch with the hands on the floor, hop both feet back into a plank (hands
     carry the body meanwhile), push-ups, hop the feet forward again, stand up."""
+    squat_low, crouch_hands = crouch(SQUAT_LOW, style), crouch(CROUCH_HANDS, style)
     four = contacts(LF, RF, LH, RH)
     hands = contacts(LH, RH)
     toes = (_TOES, _TOES)
 
     def body(tl, left):
         tm = style.tempo
-        tl.add(1.6 * tm, SQUAT_LOW, FEET, LF, label=label)
-        tl.add(1.0 * tm, CROUCH_HANDS, FEET, LF, label=label)
-        tl.add(0.2 * tm, CROUCH_HANDS, four, LH, label=label)
+        tl.add(1.6 * tm, squat_low, FEET, LF, label=label)
+        tl.add(1.0 * tm, crouch_hands, FEET, LF, label=label)
+        tl.add(0.2 * tm, crouch_hands, four, LH, label=label)
         tl.add(0.35 * tm, HOP, hands, LH, heel=(30, 30), label=label)
         tl.add(0.35 * tm, PLANK, hands, LH, heel=toes, label=label)
         tl.add(0.3 * tm, PLANK, four, LF, heel=toes, label=label)  # the toes carry the body now
@@ -378,10 +385,10 @@ def push_up(style, rng, seconds, label):
         _reps(tl, rep, left - 7.0 * tm, rng)
         tl.add(0.2 * tm, PLANK, four, LF, heel=toes, label=label)
         tl.add(0.35 * tm, HOP, hands, LH, heel=(30, 30), label=label)
-        tl.add(0.35 * tm, CROUCH_HANDS, hands, LH, label=label)
-        tl.add(0.3 * tm, CROUCH_HANDS, four, LH, label=label)
-        tl.add(0.2 * tm, CROUCH_HANDS, FEET, LF, label=label)
-        tl.add(1.0 * tm, SQUAT_LOW, FEET, LF, label=label)
+        tl.add(0.35 * tm, crouch_hands, hands, LH, label=label)
+        tl.add(0.3 * tm, crouch_hands, four, LH, label=label)
+        tl.add(0.2 * tm, crouch_hands, FEET, LF, label=label)
+        tl.add(1.0 * tm, squat_low, FEET, LF, label=label)
         tl.add(1.6 * tm, BASE, FEET, LF, label=label)
     return _frame(style, rng, seconds, label, body)
 

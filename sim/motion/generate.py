@@ -177,7 +177,7 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
         heel_mid, heel_off = [0.0, 0.0], [0.0, 0.0]
         heel_mid[stance] = 12.0  # late stance: the stance heel rises (heel off) …
         heel_off[stance] = _u(rng, *acts.HEEL_OFF_DEG)  # … and the foot leaves from its toes (toe off)
-        heel_mid[swing] = heel_off[swing] = -HEEL_STRIKE_DEG * short  # the swing foot lands on its heel, toes up
+        heel_mid[swing] = heel_off[swing] = -HEEL_STRIKE_DEG * max(short, 0.7)  # the swing foot lands on its heel, toes up
         tl.add(0.5 * step_dur, m, contacts(stance), stance, turn_rad=0.5 * turn, label=label)
         tl.add(0.5 * step_dur, end, contacts(stance), stance, turn_rad=0.5 * turn, heel=heel_mid, label=label)
         tl.add(0.12 * style.tempo, end, FEET, stance, heel=heel_off, label=label)
