@@ -63,6 +63,8 @@ def _reps(tl: Timeline, rep, seconds_left: float, rng, min_reps=1):
     return n0
 
 
+MAX_SQUAT_SCALE = 1.05  # of the squat template (knees 140°)
+MAX_BEND_SCALE = 1.1  # of the bending template (trunk 72° forward)
 MAX_STRETCH = 1.12  # an activity's keys last at most this much longer than the subject's tempo makes them
 
 
@@ -149,6 +151,7 @@ def bending(style, rng, seconds, label):
             side = _u(rng, -6, 6)
             down[J["spine2"], 1] = side  # a little twist to one side
             d = 2.6 * style.tempo * _u(rng, 0.85, 1.15)
+            a = min(a, MAX_BEND_SCALE / style.amplitude)  # the trunk stops a little below horizontal
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.6), styled(down, style, a * 1.03), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
@@ -169,6 +172,7 @@ def squat(style, rng, seconds, label):
             else:  # hands together in front of the chest
                 down = pose(down, left_shoulder=(0, -45, -55), right_shoulder=(0, 45, 55), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0))
             d = 3.4 * style.tempo * _u(rng, 0.85, 1.15)
+            a = min(a, MAX_SQUAT_SCALE / style.amplitude)  # knees stop near 147°, however flexible the person
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.5), styled(down, style, a), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)

@@ -539,7 +539,7 @@ class Rig:
 _SMOOTH = 4  # frames over which transl corrections are spread
 SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
 _UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
-_SACRUM_DROP = 0.025  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis
+_SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis
 _SINK = 0.008  # m a locked foot/hand may press into the floor before the body is lifted
 
 
