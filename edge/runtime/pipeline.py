@@ -94,7 +94,7 @@ class Runtime:
         except (SeqLedgerBusy, SeqLedgerError) as exc:
             raise SetupError(str(exc)) from None
         except OSError as exc:
-            raise SetupError(f"status file {status}: cannot keep its seq ledger beside it ({exc}); set [runtime] "
+            raise SetupError(f"status file {status}: cannot be written, nor its seq ledger beside it ({exc}); set [runtime] "
                              "status_file (--status-file) to a writable place") from None
         self.seqs = ledger
         try:
