@@ -56,6 +56,12 @@ TOPICS: tuple[TopicSpec, ...] = (
               "The stream: one record per frame with people, a heartbeat (people: []) when empty."),
     TopicSpec("<prefix>/<device>/presence", "JSON, schema cavatar.presence/1", "1", True,
               "Low-rate derived state, published when the people count or the activities change."),
+    TopicSpec("<prefix>/<device>/events", "JSON, schema cavatar.events/1", "URL ?qos= (at least 1)", False,
+              "Fall and person-down events, raised and cleared (docs/falls.md); spooled while the broker is away."),
+    TopicSpec("homeassistant/binary_sensor/<device>_person_down/config", "JSON, Home Assistant discovery", "1", True,
+              "Person-down binary sensor from the events topic; availability = status topic."),
+    TopicSpec("homeassistant/event/<device>_fall/config", "JSON, Home Assistant discovery", "1", True,
+              "Fall event entity from the events topic; availability = status topic."),
     TopicSpec("homeassistant/binary_sensor/<device>_presence/config", "JSON, Home Assistant discovery", "1", True,
               "Occupancy binary sensor from presence.present; availability = status topic."),
     TopicSpec("homeassistant/sensor/<device>_people/config", "JSON, Home Assistant discovery", "1", True,
@@ -113,6 +119,10 @@ class DeviceTopics:
     @property
     def presence(self) -> str:
         return f"{self.base}/presence"
+
+    @property
+    def events(self) -> str:
+        return f"{self.base}/events"
 
     @property
     def all(self) -> str:

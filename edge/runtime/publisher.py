@@ -37,6 +37,7 @@ class Publisher:
         self.clock = clock
         self._cond = threading.Condition()
         self._records: deque[tuple[dict, float]] = deque()
+        self._events: deque[dict] = deque()  # fall / person-down events: rare, never dropped
         self._max = max(1, int(queue_records))
         self._info: dict | None = None
         self._presence: tuple[int, tuple[str, ...]] | None = None
@@ -61,6 +62,12 @@ class Publisher:
                 self._records.popleft()
                 self.counters.add("queue_dropped")
             self._records.append((record, frame_time_s))
+            self._cond.notify()
+
+    def put_event(self, payload: dict) -> None:
+        """Queue one ``cavatar.events/1`` payload (every sink's publish_event); never dropped."""
+        with self._cond:
+            self._events.append(payload)
             self._cond.notify()
 
     def put_info(self, info: dict) -> None:
@@ -102,18 +109,24 @@ class Publisher:
         try:
             while True:
                 with self._cond:
-                    while not (self._records or self._info is not None or self._presence_due() or self._closing):
+                    while not (self._records or self._events or self._info is not None or self._presence_due()
+                               or self._closing):
                         self._cond.wait(0.25)
                     item = self._records.popleft() if self._records else None
+                    event = self._events.popleft() if self._events else None
                     info, self._info = self._info, None
                     presence = None
                     if self._presence_due():
                         presence, self._presence = self._presence, None
-                    done = self._closing and item is None and info is None and presence is None
+                    done = self._closing and item is None and event is None and info is None and presence is None
                 if done:
                     break
                 if item is not None:
                     self._publish(*item)
+                if event is not None:
+                    for sink in self.sinks:
+                        self._call(sink, "publish_event", event)
+                    self.counters.add("events_published")
                 if info is not None:
                     for sink in self.sinks:
                         self._call(sink, "publish_info", info)

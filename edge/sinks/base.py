@@ -101,6 +101,20 @@ class Sink(ABC):
             raise
         self._write_info(dict(info))
 
+    def publish_event(self, payload: Mapping) -> None:
+        """One ``cavatar.events/1`` payload (a fall or person-down event raised or cleared); checked like info."""
+        try:
+            check_telemetry(dict(payload), "event")
+            if payload.get("schema") != "cavatar.events/1" or payload.get("device") != self.device:
+                raise RecordError(f"not a cavatar.events/1 payload of device {self.device!r}")
+            line = dumps(dict(payload))
+        except RecordError:
+            self.counters.add("refused")
+            raise
+        if self.closed:
+            raise SinkError(f"{self.scheme}:// sink is closed")
+        self._write_event(dict(payload), line)
+
     def publish_status(self, online: bool) -> None:
         """Availability: True → "online", False → "offline" (close() publishes "offline" itself)."""
 
@@ -123,6 +137,9 @@ class Sink(ABC):
     def _write_bodies(self, record: Mapping, line: str, t_call: float) -> None: ...
 
     def _write_info(self, info: dict) -> None:
+        pass
+
+    def _write_event(self, payload: dict, line: str) -> None:
         pass
 
     def _gauges(self) -> dict[str, Any]:

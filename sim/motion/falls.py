@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.motion.activities import ACTIVITIES, SIT_LONG, mirror
+from sim.motion.activities import ACTIVITIES, SIT_BENT, SIT_LONG, mirror
 from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, _model, person_track
 from sim.motion.keys import BASE, Timeline, pose
 from sim.motion.rig import J, UPRIGHT, euler_deg_to_matrix, matrix_to_rotvec, rot_z
@@ -59,7 +59,7 @@ SUPINE = pose(root=(-88, 0, 0), left_shoulder=(0, 0, -45), right_shoulder=(0, 0,
               right_hip=(-10, -4, 5), left_knee=(30, 0, 0), right_knee=(20, 0, 0), neck=(15, 0, 0))
 TIP_BACK = pose(root=(-35, 0, 0), left_shoulder=(-60, 0, -40), right_shoulder=(-60, 0, 40), left_hip=(-45, 4, 0),
                 right_hip=(-40, -4, 0), left_knee=(50, 0, 0), right_knee=(45, 0, 0), spine1=(10, 0, 0))
-SIDE = pose(root=(0, 0, 86), left_shoulder=(0, 0, -78), right_shoulder=(0, 0, -85), right_elbow=(0, 0, 0), left_hip=(-30, 4, 0),
+SIDE = pose(root=(0, 0, 86), left_shoulder=(0, 0, -78), right_shoulder=(-80, 0, 70), right_elbow=(0, 20, 0), left_hip=(-30, 4, 0),
             right_hip=(-20, -4, 0), left_knee=(40, 0, 0), right_knee=(30, 0, 0), neck=(0, 0, -15))
 TIP_SIDE = pose(root=(0, 0, 35), right_shoulder=(0, 0, 20), left_shoulder=(0, 0, -40), left_hip=(-10, 4, 0),
                 right_knee=(15, 0, 0), spine2=(0, 0, -10))
@@ -80,6 +80,28 @@ HAND_DOWN = pose(SQUAT, root=(30, 0, 25), left_shoulder=(-10, 0, 10), spine2=(5,
 SIDE_PROP = pose(SIDE, root=(0, 0, 72), neck=(0, 0, -25))
 PICK = pose(root=(70, 0, 0), left_hip=(-80, 2, -3), right_hip=(-80, -2, 3), left_knee=(15, 0, 0), right_knee=(15, 0, 0),
             spine1=(10, 0, 0), spine2=(10, 0, 0), left_shoulder=(-95, 0, -80), right_shoulder=(-95, 0, 80))
+
+
+_SETTLED: dict[bytes, np.ndarray] = {}
+
+
+def settle(p: np.ndarray, model=None) -> np.ndarray:
+    """A lying pose turned (root tilt and roll within ±30°) to where its pelvis lies lowest: a body left
+    on the floor comes to rest on its hip, shoulder and thigh, not balanced on a foot and a hand."""
+    key = p.tobytes()
+    if key not in _SETTLED:
+        body = _model(model)
+        d = np.arange(-30, 31, 5.0)
+        cand = np.repeat(p[None], len(d) ** 2, axis=0)
+        cand[:, 0, 0] += np.repeat(d, len(d))
+        cand[:, 0, 2] += np.tile(d, len(d))
+        local = euler_deg_to_matrix(cand)
+        local[:, 0] = UPRIGHT @ local[:, 0]
+        out = body.forward(matrix_to_rotvec(local).reshape(len(cand), 72), None, None, vertices=True)
+        height = out["joints"][:, 0, 2] - out["vertices"][:, :, 2].min(axis=1)  # the pelvis above the floor
+        turn = np.abs(cand[:, 0, 0] - p[0, 0]) + np.abs(cand[:, 0, 2] - p[0, 2])
+        _SETTLED[key] = cand[int(np.argmin(height + 0.0004 * turn))]  # no turn for less than ~1 cm
+    return _SETTLED[key].copy()
 
 
 @dataclass
@@ -127,7 +149,7 @@ def _lie_still(s: _Script, p, rng, lie_s: float, label=_STANDING) -> None:
 def _get_up(s: _Script, rng, tempo: float, prone: bool = False) -> None:
     """From lying: to sitting (from the front: onto hands and knees), to kneeling, to standing (about 5 s)."""
     if not prone:
-        s.add(1.6 * tempo, SIT_FLOOR, PELVIS, _SITTING)
+        s.add(1.6 * tempo, settle(SIT_FLOOR), PELVIS, _SITTING)
     s.add(1.4 * tempo, KNEEL_SIT, KNEES, _SITTING)
     s.add(1.2 * tempo, KNEEL_UP, KNEES, _SITTING)
     s.add(1.4 * tempo, BASE, FEET, _STANDING)
@@ -137,7 +159,7 @@ def _falling(s: _Script, rng, tempo, via, end, fall_s) -> None:
     """Loss of balance (via, on the feet) and the drop (to end, the trunk on the floor)."""
     s.mark("start_s")
     s.add(fall_s * 0.45, via, FEET)
-    s.add(fall_s * 0.55, end, PELVIS)
+    s.add(fall_s * 0.55, settle(end), PELVIS)
     s.mark("impact_s")
 
 
@@ -157,20 +179,20 @@ def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int)
         s.add(_u(rng, 4, 8), CHAIR, FEET, _SITTING, load=0.25)
         s.mark("start_s")
         s.add(_u(rng, 1.0, 2.0), flip(CHAIR_SLUMP), FEET, _SITTING, load=0.3)
-        s.add(_u(rng, 0.5, 0.8), flip(SIDE), PELVIS, _STANDING)
+        s.add(_u(rng, 0.5, 0.8), settle(flip(SIDE)), PELVIS, _STANDING)
         s.mark("impact_s")
     elif name == "chair_slide":
         s.add(1.5 * tempo, CHAIR, FEET, _SITTING, load=0.25)
         s.add(_u(rng, 4, 8), CHAIR, FEET, _SITTING, load=0.25)
         s.mark("start_s")
-        s.add(_u(rng, 0.4, 0.7), SIT_FLOOR, PELVIS, _SITTING)
-        s.add(_u(rng, 0.5, 0.9), flip(SUPINE) if rng.random() < 0.5 else flip(SIDE), PELVIS, _STANDING)
+        s.add(_u(rng, 0.4, 0.7), settle(SIT_FLOOR), PELVIS, _SITTING)
+        s.add(_u(rng, 0.5, 0.9), settle(flip(SUPINE) if rng.random() < 0.5 else flip(SIDE)), PELVIS, _STANDING)
         s.mark("impact_s")
     elif name == "slow_collapse":
         s.mark("start_s")
         s.add(_u(rng, 1.0, 2.0), BUCKLE, FEET)
         s.add(_u(rng, 0.6, 1.0), KNEEL_SIT, KNEES)
-        s.add(_u(rng, 0.6, 0.9), flip(SIDE), PELVIS)
+        s.add(_u(rng, 0.6, 0.9), settle(flip(SIDE)), PELVIS)
         s.mark("impact_s")
     elif name == "kneel":
         s.add(_u(rng, 1.5, 2.5) * tempo, KNEEL_UP, KNEES, _SITTING)
@@ -180,17 +202,17 @@ def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int)
     elif name == "lie_down":  # onto an exercise mat: kneel, sit, lie back
         s.add(_u(rng, 1.5, 2.5) * tempo, KNEEL_UP, KNEES, _SITTING)
         s.add(_u(rng, 1.2, 2.0) * tempo, KNEEL_SIT, KNEES, _SITTING)
-        s.add(_u(rng, 1.5, 2.5) * tempo, SIT_FLOOR, PELVIS, _SITTING)
-        s.add(_u(rng, 2.0, 3.0) * tempo, SUPINE, PELVIS, _SIT_UP)
-        _lie_still(s, SUPINE, rng, lie_s, _SIT_UP)
+        s.add(_u(rng, 1.5, 2.5) * tempo, settle(SIT_BENT), PELVIS, _SITTING)  # onto the buttocks, knees up
+        s.add(_u(rng, 2.0, 3.0) * tempo, settle(SUPINE), PELVIS, _SIT_UP)
+        _lie_still(s, settle(SUPINE), rng, lie_s, _SIT_UP)
         _get_up(s, rng, tempo)
         return s
     elif name == "lie_down_hand_first":  # slowly onto the side, a hand on the floor first
         s.add(_u(rng, 1.5, 2.2) * tempo, SQUAT, FEET)
         s.add(_u(rng, 1.2, 2.0) * tempo, flip(HAND_DOWN), FEET)
         s.add(_u(rng, 1.5, 2.5) * tempo, flip(SIDE_PROP), PELVIS, _SITTING)
-        s.add(_u(rng, 1.5, 2.5) * tempo, flip(SIDE), PELVIS, _SIT_UP)
-        _lie_still(s, flip(SIDE), rng, lie_s, _SIT_UP)
+        s.add(_u(rng, 1.5, 2.5) * tempo, settle(flip(SIDE)), PELVIS, _SIT_UP)
+        _lie_still(s, settle(flip(SIDE)), rng, lie_s, _SIT_UP)
         _get_up(s, rng, tempo)
         return s
     elif name == "pick_up":
@@ -235,7 +257,7 @@ def _place(model, betas, pose_aa: np.ndarray, anchor: np.ndarray, start_xy) -> n
 
 
 def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ, rng=None, model=None,
-               lie_s: float | None = None, get_up: bool | None = None, walk_s: float = 4.0,
+               lie_s: float | None = None, get_up: bool | None = None, walk_s: float = 3.0,
                heading_rad: float = 0.0, start_xy=(0.0, 0.0)) -> FallTrack:
     """One scenario (a name from SCENARIOS) for ``subject`` at rate_hz, truth included.
 
@@ -252,7 +274,8 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
     lead = None
     head, xy = float(heading_rad), np.asarray(start_xy, float)
     if scenario.startswith("walk_"):
-        lead = person_track(subject, ["walking"], walk_s, rate_hz, rng, body, heading_rad=head, start_xy=xy)
+        lead = person_track(subject, ["walking"], walk_s, rate_hz, rng, body, heading_rad=head, start_xy=xy,
+                            walk_radius_m=0.3, walk_line=True)
         head = _heading_of(lead.pose_aa[-1, :3])
         xy = lead.transl_m[-1, :2]
     s = _script(scenario, rng, subject.style.tempo, lie_s, get_up, int(rng.integers(0, 2)))
@@ -306,4 +329,18 @@ def on_carpet(ft: FallTrack, carpet_size_m=(1.83, 1.83), rng=None, model=None, m
     raise ValueError(f"{ft.truth['scenario']} does not fit on a {size[0]:.2f}×{size[1]:.2f} m carpet")
 
 
-__all__ = ["FALLS", "LOOKALIKES", "SCENARIOS", "FallTrack", "fall_track", "on_carpet"]
+def scenario_scene(subject: Subject, scenario: str, seconds: float, rate_hz: float, size_m: float, seed, model=None):
+    """A one-person Scene of ``scenario`` exactly round(seconds·rate_hz) frames long (the last frame held
+    when the scenario is shorter), placed on a size_m carpet: what sim://?activities=… streams. The
+    truth of the fall is ``fall_track``'s; on the live carpet a chair carries nothing (load on the feet)."""
+    from sim.motion.generate import Scene
+
+    rng = np.random.default_rng(seed)
+    ft = on_carpet(fall_track(subject, scenario, rate_hz, rng, model), (size_m, size_m), rng, model)
+    tr, n = ft.track, int(round(seconds * rate_hz))
+    idx = np.minimum(np.arange(n), len(tr) - 1)
+    track = Track(tr.subject_id, tr.betas, tr.pose_aa[idx], tr.transl_m[idx], tr.activity[idx], tr.contact[idx], tr.rate_hz)
+    return Scene([track], float(rate_hz), (float(size_m), float(size_m)))
+
+
+__all__ = ["FALLS", "LOOKALIKES", "SCENARIOS", "FallTrack", "fall_track", "on_carpet", "scenario_scene"]

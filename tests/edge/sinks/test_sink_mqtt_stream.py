@@ -110,6 +110,8 @@ def test_home_assistant_discovery_payloads(broker, subscribe):
             f"homeassistant/binary_sensor/{DEVICE}_presence/config",
             f"homeassistant/sensor/{DEVICE}_people/config",
             f"homeassistant/sensor/{DEVICE}_activity/config",
+            f"homeassistant/binary_sensor/{DEVICE}_person_down/config",  # fall events (docs/falls.md)
+            f"homeassistant/event/{DEVICE}_fall/config",
         }
         assert wait_until(lambda: expected <= {t for t, *_ in ha.messages}, 10)
         n_before = len(ha.messages)
@@ -125,7 +127,7 @@ def test_home_assistant_discovery_payloads(broker, subscribe):
     for topic, cfg in configs.items():
         assert cfg["availability_topic"] == T.status
         assert cfg["payload_available"] == "online" and cfg["payload_not_available"] == "offline"
-        assert cfg["state_topic"] == T.presence
+        assert cfg["state_topic"] == (T.events if topic.endswith(("_person_down/config", "_fall/config")) else T.presence)
         assert cfg["unique_id"].startswith("cavatar_") and "value_template" in cfg
         assert cfg["device"]["identifiers"] == [f"cavatar_{DEVICE}"]
     assert configs[f"homeassistant/binary_sensor/{DEVICE}_presence/config"]["device_class"] == "occupancy"
