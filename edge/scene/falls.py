@@ -6,23 +6,24 @@
 
 Per frame the confirmed people are grouped into *bodies*: observations whose centres of pressure
 lie within ``merge_radius_m`` (a fallen person's feet and trunk often land as two tracks, over a
-metre apart). Each body gets its load (N), contact area (m²) and length (m: four standard
-deviations of its pressure along its major axis). A body is
+metre apart; two people on their feet never merge). Each body gets its load (N), contact area (m²),
+centre and length (m: four standard deviations of its pressure along its major axis). Thresholds are
+on the area and the geometry, which calibration hardly changes; loads only gate (the calibrated load
+of a person standing reads well below their weight where the feet saturate the sensels). A body is
 
-- *on its feet* when it is a person's load (≥ person_min_force_n) on a small, short footprint;
-- *on the floor* when the load lies on a large, long footprint (lying, not sitting or kneeling).
+- *on its feet* when a small, short footprint carries at least feet_min_force_n;
+- *on the floor* when a large footprint carries at least person_min_force_n (lying, not sitting,
+  kneeling or a plank); it stays there down to floor_stay_min_area_m2.
 
-The arrival must also move the load: the body on its feet lay at least min_shift_m away from where
-the load now lies, and the load grew by at most max_added_load_n (a bag dropped or a pet lying down
-beside a standing person adds load where they stand).
-
-A floor *episode* starts where a body is on the floor; its *arrival* is the time since anything
-stood on its feet within fall_radius_m of it. ``fall`` is raised once the episode has lasted
-confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival time);
-``person_down`` once it has lasted person_down_s when the arrival took at most down_window_s and
-no exercise activity (push-ups, sit-ups) was seen on its tracks. Both clear when the episode ends
-(nobody on the floor there for release_s), and all clear on reset() (board lost, source ended).
-Pets and dropped objects carry less than a person's load and are never on their feet first.
+A floor *episode* starts where a body comes onto the floor; its *arrival* is the time since a body
+last stood on its feet within fall_radius_m of it, if that was at least min_shift_m away (the load moved by about
+a body's height: sitting down, or a bag dropped or a pet lying down beside a standing person, moves
+it less), carrying at least 1/max_load_ratio of the lying load. ``fall`` is raised once the episode
+has lasted confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival
+time); ``person_down`` once it has lasted person_down_s when the arrival took at most down_window_s
+and the model did not call its tracks an exercise (push-ups, sit-ups) while the body moved. Both clear when the episode
+ends (nobody on the floor there for release_s), and all clear on reset() (board lost, runtime
+stopped).
 """
 
 from __future__ import annotations
@@ -34,6 +35,10 @@ import numpy as np
 
 
 EVENT_TYPES = ("fall", "person_down")
+EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
+EXERCISE_AREA_FRACTION = 0.05  # ... or its contact area changes by more than this fraction
+EXERCISE_RATE_HZ = 14.0  # frames are counted as 1/14 s each towards exercise_s
+STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
 
 
 def _f(default, doc: str):
@@ -56,26 +61,26 @@ class FallConfig:
     down_window_s: float = _f(6.0, "person_down also for arrivals up to this slow (a slower, controlled lie-down "
                                    "never raises it)")
     release_s: float = _f(2.0, "events clear when nobody has been on the floor there for this long")
-    person_min_force_n: float = _f(300.0, "a body carries at least this load to count as a person (a 30 kg pet or "
-                                          "a bag carries less)")
+    person_min_force_n: float = _f(150.0, "a body on the floor carries at least this load to count as a person (the "
+                                          "calibrated load of a standing adult reads ≈ 250–700 N)")
     merge_radius_m: float = _f(1.5, "tracks whose centres of pressure are closer than this form one body (a fallen "
                                     "person's feet and trunk often land as two tracks); two people on their feet "
                                     "never merge")
-    feet_min_force_n: float = _f(80.0, "on the feet: at least this load (a person seated on a chair beside the "
+    feet_min_force_n: float = _f(60.0, "on the feet: at least this load (a person seated on a chair beside the "
                                        "carpet has only their feet on it)")
-    feet_max_area_m2: float = _f(0.055, "on the feet: contact area at most this")
+    feet_max_area_m2: float = _f(0.05, "on the feet: contact area at most this (two feet ≈ 0.02–0.045 m²)")
     feet_max_length_m: float = _f(0.9, "on the feet: pressure length (4 standard deviations, major axis) at most this")
-    floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this")
+    floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this (lying ≈ 0.05–0.11 m²)")
     floor_min_length_m: float = _f(0.0, "on the floor (lying): pressure length at least this")
-    floor_max_kpa: float = _f(11.5, "on the floor (lying): mean pressure (load / contact area) at most this")
-    floor_stay_max_kpa: float = _f(13.0, "still on the floor (once there): mean pressure at most this")
-    feet_min_kpa: float = _f(14.0, "on the feet: mean pressure at least this (standing ≈ 15–25 kPa, lying ≈ 5–10)")
+    floor_stay_min_area_m2: float = _f(0.04, "still on the floor (once there): contact area at least this")
     fall_radius_m: float = _f(1.6, "the body on its feet must have stood within this of where the load now lies")
-    min_shift_m: float = _f(0.45, "... and at least this far from it (the load moved)")
-    max_added_load_n: float = _f(100.0, "... and carried no less than the lying load minus this (a dropped bag or "
-                                        "a pet lying down beside someone adds load)")
+    min_shift_m: float = _f(0.45, "... and at least this far from it: the load moved by about a body's height "
+                                  "(sitting down or a bag dropped beside someone moves it less)")
+    max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this")
     exercise_activities: list[str] = _f(["push_up", "sit_up"], "the model's activities that mark a floor exercise: "
-                                                                "no person_down while one is seen")
+                                                                "no person_down once seen while the body moves ...")
+    exercise_s: float = _f(1.5, "... for this long in all (someone lying still is not exercising, whatever the "
+                                "model calls the pose)")
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -182,6 +187,8 @@ class _Episode:
     arrival_s: float | None
     track_ids: set
     exercise: bool = False
+    exercise_s: float = 0.0
+    area_m2: float = 0.0
     fall: bool = False
     down: bool = False
     fall_conf: float = 0.0
@@ -195,6 +202,7 @@ class FallDetector:
         self.pitch_m = float(pitch_m)
         self._feet: deque = deque()  # (t_s, centre (2,)) of bodies on their feet, the last down_window_s
         self._episodes: list[_Episode] = []
+        self._standing_since: dict[int, float] = {}
         self.raised = {"fall": 0, "person_down": 0}
 
     # ------------------------------------------------------------------ per frame
@@ -208,9 +216,14 @@ class FallDetector:
     def step_observations(self, t_s: float, obs: list[Observation], activities: dict) -> list[dict]:
         """The same from observations (the score replays cached ones): merged into bodies, then step()."""
         c = self.config
+        standing = {}
+        for o in obs:  # how long each track has stood on its feet (a person's load on a small footprint)
+            if o.area_m2 <= c.feet_max_area_m2 and o.force_n >= c.person_min_force_n:
+                standing[o.track_id] = self._standing_since.get(o.track_id, t_s)
+        self._standing_since = standing
 
         def apart(a: Observation, b: Observation) -> bool:  # two people standing side by side stay two
-            return all(o.area_m2 <= c.feet_max_area_m2 and o.force_n >= c.person_min_force_n for o in (a, b))
+            return all(t_s - standing.get(o.track_id, t_s) >= STANDING_APART_S for o in (a, b))
 
         return self.step(t_s, merge(obs, c.merge_radius_m, apart), activities)
 
@@ -222,26 +235,28 @@ class FallDetector:
             self._feet.popleft()
         seen: set[int] = set()
         for b in bodies:
-            kpa = b.force_n / max(b.area_m2, 1e-6) / 1000.0  # mean pressure: high on the feet, low lying
             ep = self._episode_near(b) if b.force_n >= c.person_min_force_n else None
-            if ep is not None and kpa > c.floor_stay_max_kpa:
+            if ep is not None and b.area_m2 < c.floor_stay_min_area_m2:
                 ep = None  # up again (or never down): the episode ends after release_s
             if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
-                               and b.length_m <= c.feet_max_length_m and kpa >= c.feet_min_kpa):
+                               and b.length_m <= c.feet_max_length_m):
                 self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
                 continue
             if b.force_n < c.person_min_force_n:
                 continue  # a pet, a bag, a hand on the carpet
-            floor = b.area_m2 >= c.floor_min_area_m2 and b.length_m >= c.floor_min_length_m and kpa <= c.floor_max_kpa
+            floor = b.area_m2 >= c.floor_min_area_m2 and b.length_m >= c.floor_min_length_m
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
             if ep is None:
-                ep = _Episode(t_s, t_s, b.centre_m, self._arrival(t_s, b), set(b.track_ids))
+                ep = _Episode(t_s, t_s, b.centre_m, self._arrival(t_s, b), set(b.track_ids), area_m2=b.area_m2)
                 self._episodes.append(ep)
-            ep.last_t, ep.centre_m = t_s, b.centre_m
+            moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
+                      or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
+            if moving and any(activities.get(k) in c.exercise_activities for k in b.track_ids):
+                ep.exercise_s += 1.0 / EXERCISE_RATE_HZ  # the model says exercise AND the body moves
+                ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
+            ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
             ep.track_ids |= set(b.track_ids)
-            if any(activities.get(k) in c.exercise_activities for k in b.track_ids):
-                ep.exercise = True
             seen.add(id(ep))
             events += self._advance(ep, t_s, b)
         keep = []
@@ -258,7 +273,7 @@ class FallDetector:
         events = []
         for ep in self._episodes:
             events += self._clear(ep, t_s, reason)
-        self._episodes, self._feet = [], deque()
+        self._episodes, self._feet, self._standing_since = [], deque(), {}
         return events
 
     @property
@@ -277,16 +292,12 @@ class FallDetector:
         return best
 
     def _arrival(self, t_s: float, b: BodyFeatures) -> float | None:
-        """Seconds since this load stood on its feet nearby: a body on its feet within fall_radius_m whose
-        centre lay at least min_shift_m away and which carried no less than this body's load minus
-        max_added_load_n (a bag or a pet beside a standing person adds load and hardly moves the centre).
-        None: no such body within down_window_s."""
+        """Seconds since this load stood on its feet nearby (see the module doc); None: not within down_window_s."""
         c = self.config
         for t, centre, force in reversed(self._feet):
             d = float(np.linalg.norm(centre - b.centre_m))
-            whole = force >= c.person_min_force_n  # a whole person stood there (not a seated person's feet)
-            if c.min_shift_m <= d <= c.fall_radius_m and (not whole or b.force_n - force <= c.max_added_load_n):
-                return t_s - t
+            if d <= c.fall_radius_m and b.force_n <= c.max_load_ratio * force:  # lighter: mid-air, not standing
+                return t_s - t if d >= c.min_shift_m else None  # the last time they stood: did the load move?
         return None
 
     def _advance(self, ep: _Episode, t_s: float, b: BodyFeatures) -> list[dict]:

@@ -210,7 +210,7 @@ def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int)
     elif name == "lie_down_hand_first":  # slowly onto the side, a hand on the floor first
         s.add(_u(rng, 1.5, 2.2) * tempo, SQUAT, FEET)
         s.add(_u(rng, 1.2, 2.0) * tempo, flip(HAND_DOWN), FEET)
-        s.add(_u(rng, 1.5, 2.5) * tempo, flip(SIDE_PROP), PELVIS, _SITTING)
+        s.add(_u(rng, 1.5, 2.5) * tempo, flip(settle(SIT_BENT)), PELVIS, _SITTING)  # onto the hip, sitting
         s.add(_u(rng, 1.5, 2.5) * tempo, settle(flip(SIDE)), PELVIS, _SIT_UP)
         _lie_still(s, settle(flip(SIDE)), rng, lie_s, _SIT_UP)
         _get_up(s, rng, tempo)
