@@ -72,6 +72,8 @@ class FallConfig:
     feet_max_length_m: float = _f(0.9, "on the feet: pressure length (4 standard deviations, major axis) at most this")
     floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this (lying ≈ 0.05–0.11 m²)")
     floor_min_length_m: float = _f(0.0, "on the floor (lying): pressure length at least this")
+    floor_long_m: float = _f(1.6, "... or a body this long (feet to shoulders on the floor) ...")
+    floor_long_min_area_m2: float = _f(0.025, "... with at least this contact area")
     floor_stay_min_area_m2: float = _f(0.04, "still on the floor (once there): contact area at least this")
     fall_radius_m: float = _f(1.6, "the body on its feet must have stood within this of where the load now lies")
     min_shift_m: float = _f(0.45, "... and at least this far from it: the load moved by about a body's height "
@@ -244,7 +246,8 @@ class FallDetector:
                 continue
             if b.force_n < c.person_min_force_n:
                 continue  # a pet, a bag, a hand on the carpet
-            floor = b.area_m2 >= c.floor_min_area_m2 and b.length_m >= c.floor_min_length_m
+            floor = b.length_m >= c.floor_min_length_m and (
+                b.area_m2 >= c.floor_min_area_m2 or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2))
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
             if ep is None:
