@@ -60,8 +60,14 @@ def _people(clip: Clip, body, rng):
     subject = Subject.random(100 + clip.seed, rng)
     size = GRID * PITCH_M
     if clip.kind in ("fall", "lookalike"):
-        lie = float(rng.uniform(33.0, 40.0)) if clip.kind == "fall" else float(rng.uniform(20.0, 45.0))
-        ft = on_carpet(fall_track(subject, clip.what, RATE_HZ, rng, body, lie_s=lie), (size, size), rng, body)
+        for attempt in range(4):  # a tall subject's fall may not fit on the carpet: draw the motion again
+            lie = float(rng.uniform(33.0, 40.0)) if clip.kind == "fall" else float(rng.uniform(20.0, 45.0))
+            try:
+                ft = on_carpet(fall_track(subject, clip.what, RATE_HZ, rng, body, lie_s=lie), (size, size), rng, body)
+                break
+            except ValueError:
+                if attempt == 3:
+                    raise
         return [(ft.track, ft.load_fraction)], ft.truth, ft.truth["seconds"]
     if clip.kind == "pet":
         return [], {"scenario": "pet", "fall": False}, clip.seconds
