@@ -60,7 +60,9 @@ def _people(clip: Clip, body, rng):
     subject = Subject.random(100 + clip.seed, rng)
     size = GRID * PITCH_M
     if clip.kind in ("fall", "lookalike"):
-        for attempt in range(4):  # a tall subject's fall may not fit on the carpet: draw the motion again
+        for attempt in range(4):  # a tall subject's fall may not fit on the carpet: draw another subject
+            if attempt:
+                subject = Subject.random(100 + clip.seed + 1000 * attempt, rng)
             lie = float(rng.uniform(33.0, 40.0)) if clip.kind == "fall" else float(rng.uniform(20.0, 45.0))
             try:
                 ft = on_carpet(fall_track(subject, clip.what, RATE_HZ, rng, body, lie_s=lie), (size, size), rng, body)
