@@ -140,7 +140,11 @@ def markdown(result: dict[str, Any]) -> str:
     lines = [
         "# Fall score", "",
         f"Command: `{result['command']}`  ", f"Clips: {result['clips_file']} (tuned on {result['tuned_on'] or '—'}); "
-        f"git {result['git_revision']}; {result['date']}", "",
+        f"git {result['git_revision']}; {result['date']}  ",
+        f"Scored on seeds {result.get('seeds')}; the thresholds were tuned on seeds {result.get('tuning_seeds', '—')} "
+        f"(there: {result.get('tuning_set', {}).get('detected_pct', '—')} % of "
+        f"{result.get('tuning_set', {}).get('falls', '—')} falls, {result.get('tuning_set', {}).get('false_alarms', '—')} "
+        f"false alarms in {result.get('tuning_set', {}).get('ordinary_hours', '—')} h).", "",
         "Path: simulated bodies → contact model (clean pressure: no sensor noise, no calibration) → the runtime's "
         "SceneTracker → edge.scene.falls. The model's activity is not used (pressure alone).", "",
         "| target | measured | target met |", "|---|---|---|",
@@ -223,9 +227,12 @@ def main(argv=None) -> int:
               "targets": {"detected": s["detected_pct"] >= 97.0, "delay": (s["median_delay_s"] or 99) <= 3.0,
                           "person_down": s["person_down_in_time_pct"] >= 97.0,
                           "false_alarms": s["false_alarms_per_24h"] <= 1.0}}
+    result["seeds"] = sorted({c["seed"] for c in clips})
     if a.tuned_on:
-        t = score(load_clips(a.tuned_on), config)
+        tuning = load_clips(a.tuned_on)
+        t = score(tuning, config)
         result["tuning_set"] = {k: v for k, v in t.items() if k not in ("clips",)}
+        result["tuning_seeds"] = sorted({c["seed"] for c in tuning})
     prefix = Path(a.out)
     prefix.parent.mkdir(parents=True, exist_ok=True)
     prefix.with_suffix(".json").write_text(json.dumps(result, indent=1) + "\n")
