@@ -73,7 +73,14 @@ def tracking(people: int, seed: int, n: int = 840) -> dict:
     return {"people": people, "seed": seed, "seconds": round(n / 14, 1), **score_tracking(truth, reported, 0.5).to_dict()}
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(description="scene step cost and tracking quality")
+    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "scene_pipeline.json")
+    ap.add_argument("--before", type=Path, help="a result of this bench on earlier code, kept beside as 'before'")
+    ap.add_argument("--before-code", default="d34ed20 (edge/scene before the body-aware grouping)")
+    args = ap.parse_args(argv)
     timings = [timing(0, 0), timing(1, 1), timing(2, 1), timing(3, 24)]
     tracks = [tracking(k, s) for k, seeds in TRACK_SCENES.items() for s in seeds]
     totals = {}
@@ -97,7 +104,12 @@ def main() -> int:
                      "reported = one-euro centre of pressure; 60 s per scene", "scenes": tracks, "totals": totals},
     }
     out["machine"]["load_average_1_5_15_at_end"] = [round(x, 2) for x in os.getloadavg()]
-    path = Path(__file__).parent / "results" / "scene_pipeline.json"
+    if args.before:
+        old = json.loads(args.before.read_text())
+        out["before"] = {"code": args.before_code, "timing": old["timing"], "tracking_totals": old["tracking"]["totals"],
+                         "machine": old["machine"]}
+        out["command"] += f" --before {args.before}"
+    path = args.out
     path.write_text(json.dumps(out, indent=1) + "\n")
     for r in timings:
         print(f"{r['people']} people: " + ", ".join(f"{k} {v['median_ms']}/{v['p99_ms']}" for k, v in r["stages"].items()) + " ms (median/p99)")

@@ -6,6 +6,10 @@
     cavatar calibrate --work calib-work --redo board ...                  # redo one step alone
 
 Writes the calibration file (``--out``), ``<out>.png`` and ``<out>.txt`` (the report).
+
+Before anything is asked or recorded, the destination and the session folder are tested by
+writing, and a live board is opened and must answer (calibration/preflight.py): a missing or
+busy port, an unwritable --out or a closed stdin is one line and exit 2, never a traceback.
 """
 
 from __future__ import annotations
@@ -62,12 +66,27 @@ def _provider(args):
             args.mass = 72.0
         return SimProvider(Actor(sensor, mass_kg=args.mass, seed=args.seed), args.intruder, live_map=not args.no_map)
     if args.source:
-        if args.mass is None:
-            args.mass = float(input("The person doing the poses: mass in kg? "))
         return LiveProvider(args.source)
     if files:
         return RecordingProvider(files)
     return None
+
+
+def preflight(args: argparse.Namespace, ask=input) -> None:
+    """Destination, session folder, recordings, board — then the mass: CliError (one line) at the first problem."""
+    from calibration.preflight import PreflightError, ask_mass, check_board, check_destination, check_recordings, \
+        check_work_folder
+
+    try:
+        check_destination(Path(args.out))
+        check_work_folder(Path(args.work))
+        check_recordings({s: getattr(args, s) for s in STEP_FILES if getattr(args, s)})
+        if args.source:
+            check_board(args.source)
+            if args.mass is None:
+                args.mass = ask_mass(ask)
+    except PreflightError as exc:
+        raise CliError(str(exc)) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -75,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
     from calibration.report import write_report
     from calibration.session import STEPS, Options, Session, SessionError
     from calibration.terminal import render_map
+    from edge.sources import LinkLost, SourceError
 
+    preflight(args)
     provider = _provider(args)
     opts = Options(mass_kg=args.mass, board_mass_kg=args.board_mass, crosstalk_r_norm=args.crosstalk_r_norm,
                    shape_from_walk=args.shape_from_walk, mask_path=args.mask)
@@ -90,8 +111,11 @@ def run(args: argparse.Namespace) -> int:
                 s for s in STEPS if s == "self_test" and args.empty or getattr(args, s, None))
             session.run(provider, steps=steps, redo=args.redo)
         cal, val = session.finish(args.out)
-    except (SessionError, CalibrationError, FileNotFoundError, ValueError) as exc:
+    except (SessionError, CalibrationError, FileNotFoundError, ValueError, SourceError, LinkLost, OSError) as exc:
         raise CliError(f"{exc} (the session so far is kept in {args.work}; fix it and run again, or --redo STEP)") from None
+    except EOFError:
+        raise CliError(f"standard input closed while waiting for Enter: the guided session needs a terminal (the "
+                       f"session so far is kept in {args.work}; run again in a terminal to resume)") from None
     results = session.all_results()
     out = Path(args.out)
     png, txt = out.with_suffix(".png"), out.with_suffix(".txt")

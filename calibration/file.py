@@ -27,6 +27,10 @@ import hashlib
 import io
 import json
 import os
+import stat
+import struct
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -51,6 +55,74 @@ UNUSABLE = FAULT["dead"] | FAULT["stuck"] | FAULT["noisy"] | FAULT["short"] | FA
 
 class CalibrationError(Exception):
     """A calibration file that is unreadable, damaged, or does not fit this device."""
+
+
+MAX_FILE_BYTES = 64 << 20  # a 512×512 calibration is ~3 MB uncompressed
+MAX_META_BYTES = 1 << 20
+MAX_GRID = 512
+NPY_HEADER_MAX = 4096  # an .npy header (magic, version, dict) is ~128 bytes
+
+
+def _read_npz(path: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """``meta`` and the arrays of a calibration npz, checking sizes BEFORE decompressing anything."""
+    st = os.stat(path)
+    if not stat.S_ISREG(st.st_mode):
+        raise CalibrationError("not a regular file")
+    if st.st_size == 0:
+        raise CalibrationError("the file is empty")
+    if st.st_size > MAX_FILE_BYTES:
+        raise CalibrationError(f"{st.st_size} bytes, more than a calibration ever takes ({MAX_FILE_BYTES})")
+    with zipfile.ZipFile(path) as zf:
+        members = {i.filename: i for i in zf.infolist()}
+        want = {f"{k}.npy" for k in ("meta", *ARRAYS)}
+        if set(members) != want:
+            extra, missing = sorted(set(members) - want), sorted(want - set(members))
+            raise CalibrationError(f"not a calibration npz (missing {missing or '-'}, unexpected {extra or '-'})")
+        if members["meta.npy"].file_size > MAX_META_BYTES + NPY_HEADER_MAX:
+            raise CalibrationError(f"its meta would inflate to {members['meta.npy'].file_size} bytes "
+                                   f"(at most {MAX_META_BYTES})")
+        meta_arr = _read_member(zf, "meta.npy", MAX_META_BYTES)
+        if meta_arr.dtype.kind != "U" or meta_arr.shape != ():
+            raise CalibrationError("its meta is not one JSON string")
+        meta = json.loads(str(meta_arr))
+        if not isinstance(meta, dict):
+            raise CalibrationError("its meta is not a JSON object")
+        device = meta.get("device")
+        rows, cols = (device.get("rows"), device.get("cols")) if isinstance(device, dict) else (None, None)
+        if not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= MAX_GRID for n in (rows, cols)):
+            raise CalibrationError(f"its device grid {rows!r}×{cols!r} is out of range (1..{MAX_GRID} each)")
+        arrays = {}
+        for name in ARRAYS:
+            limit = rows * cols * 8  # float64 is the widest dtype a writer could have used
+            declared = members[f"{name}.npy"].file_size
+            if declared > limit + NPY_HEADER_MAX:
+                raise CalibrationError(f"{name} would inflate to {declared} bytes; a {rows}×{cols} grid needs at most "
+                                       f"{limit + NPY_HEADER_MAX}")
+            arrays[name] = _read_member(zf, f"{name}.npy", limit)
+    return meta, arrays
+
+
+def _read_member(zf: zipfile.ZipFile, name: str, limit: int) -> np.ndarray:
+    """One .npy member of at most ``limit`` data bytes: its header is checked before its data is read (no
+    pickles, no object arrays); zipfile itself stops at the size the entry declares."""
+    fmt = np.lib.format
+    with zf.open(name) as f:
+        version = fmt.read_magic(f)
+        if version == (1, 0):
+            shape, fortran, dtype = fmt.read_array_header_1_0(f)
+        elif version == (2, 0):
+            shape, fortran, dtype = fmt.read_array_header_2_0(f)
+        else:
+            raise CalibrationError(f"{name} has an unknown .npy version {version}")
+        if dtype.hasobject:
+            raise CalibrationError(f"{name} holds Python objects; a calibration holds numbers only")
+        nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+        if nbytes > limit:
+            raise CalibrationError(f"{name} declares {shape} of {dtype} ({nbytes} bytes), at most {limit} expected")
+        data = f.read(nbytes)
+        if len(data) != nbytes:
+            raise CalibrationError(f"{name} is truncated ({len(data)} of {nbytes} bytes)")
+    return np.frombuffer(data, dtype).reshape(shape, order="F" if fortran else "C").copy()
 
 
 @dataclass
@@ -187,15 +259,23 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | Path) -> "Calibration":
+        """Read and verify a calibration file; CalibrationError (one line: what is wrong, what to do) otherwise.
+
+        Checked before anything is decompressed: a regular file of at most ``MAX_FILE_BYTES``; an npz holding
+        exactly ``meta`` and the arrays; the meta small, the grid in range, and every array's declared size the
+        size its grid needs (so a small file that would inflate to gigabytes is refused unread)."""
         path = Path(path)
         if not path.exists():
             raise CalibrationError(f"no calibration file {path}; create one with `cavatar calibrate`")
         try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
-                arrays = {k: z[k] for k in ARRAYS}
-        except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
-            raise CalibrationError(f"{path} is not a readable calibration file ({exc})") from None
+            meta, arrays = _read_npz(path)
+        except CalibrationError as exc:
+            raise CalibrationError(f"{path}: {exc}; restore the file or recalibrate with `cavatar calibrate`") from None
+        except (OSError, EOFError, ValueError, KeyError, RuntimeError, NotImplementedError, zipfile.BadZipFile,
+                zlib.error, struct.error) as exc:
+            reason = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
+            raise CalibrationError(f"{path} is not a readable calibration file (damaged or truncated: {reason}); "
+                                   "restore it or recalibrate with `cavatar calibrate`") from None
         if meta.get("schema") != SCHEMA:
             raise CalibrationError(f"{path}: schema {meta.get('schema')!r}; this version reads {SCHEMA!r}")
         stored = meta.pop("sha256", "")
@@ -209,6 +289,9 @@ class Calibration:
                       validation=meta["validation"], created=meta["created"], sha256=stored)
         except CalibrationError as exc:
             raise CalibrationError(f"{path}: {exc}") from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CalibrationError(f"{path}: its metadata lacks or mistypes a field ({type(exc).__name__}: {exc}); "
+                                   "recalibrate with `cavatar calibrate`") from None
         if cal.shape != (meta["device"]["rows"], meta["device"]["cols"]):
             raise CalibrationError(f"{path}: arrays are {cal.shape}, the device record says {meta['device']['rows']}×{meta['device']['cols']}")
         return cal

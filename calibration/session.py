@@ -67,10 +67,10 @@ class Session:
 
     # ------------------------------------------------------------------ storage
     def _save_state(self) -> None:
+        from edge.atomic import write_atomic
+
         state = {"done": self.done, "options": self.options.__dict__}
-        part = self.workdir / "state.json.part"
-        part.write_text(json.dumps(state, indent=1))
-        part.replace(self.workdir / "state.json")
+        write_atomic(self.workdir / "state.json", json.dumps(state, indent=1))
 
     def result(self, step: str) -> StepResult | None:
         path = self.workdir / f"{step}.npz"

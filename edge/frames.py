@@ -4,7 +4,9 @@ Policy for a frame that is not whole (documented in README and SPEC.md):
 
 - every row present, FRAME_END seen, CRC-32 matches → the frame is emitted;
 - CRC-32 mismatch → dropped (``crc_mismatch``): some sample is wrong, we cannot say which;
-- rows missing (a torn frame: FRAME_END says so, or the next frame began first) →
+- no FRAME_END (the next frame began first) → dropped (``missing_frame_end``), whole or
+  not: without it nothing says the rows belong together (rows of two frames could mix);
+- rows missing but FRAME_END seen (a torn frame) →
   ``missing_rows="drop"`` (default) drops it (``torn_dropped``);
   ``missing_rows="flag"`` emits it when at most ``max_missing_rows`` are missing,
   with those rows copied from the last good frame and marked in ``RawFrame.stale``
@@ -158,6 +160,9 @@ class FrameAssembler:
     def _finish(self, expected_crc: int | None, end_t_us: int) -> list[RawFrame]:
         seq, rows, packing = self._cur_seq, self._rows, self._packing
         self._cur_seq, self._rows, self._packing = None, {}, None
+        if expected_crc is None:  # never emitted unchecked
+            self.counters["missing_frame_end"] += 1
+            return []
         missing = [r for r in range(self.rows) if r not in rows]
         stale = None
         if missing:
@@ -173,9 +178,7 @@ class FrameAssembler:
             self.counters["torn_flagged"] += 1
         else:
             wire = unpack_rows([rows[r] for r in range(self.rows)], packing, self.cols)
-            if expected_crc is None:
-                self.counters["missing_frame_end"] += 1
-            elif zlib.crc32(wire.astype("<u2").tobytes()) != expected_crc:
+            if zlib.crc32(wire.astype("<u2").tobytes()) != expected_crc:
                 self.counters["crc_mismatch"] += 1
                 return []
         if not self._continuity(seq, end_t_us):

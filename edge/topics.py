@@ -7,9 +7,9 @@ lists them; a test keeps the two in step)::
     <prefix>/<device>/info      JSON                   QoS 1, retained
     <prefix>/<device>/bodies    cavatar.bodies/1       QoS from the sink URL, not retained
     <prefix>/<device>/presence  cavatar.presence/1     QoS 1, retained, published on change
-    homeassistant/binary_sensor/<device>_presence/config   Home Assistant discovery,
-    homeassistant/sensor/<device>_people/config            QoS 1, retained; availability
-    homeassistant/sensor/<device>_activity/config          is the status topic
+    <prefix>/<device>/board     "online" / "offline"   QoS 1, retained: frames arriving from the board
+    homeassistant/<component>/<device>_<entity>/config     Home Assistant discovery, QoS 1,
+                                                           retained (edge/ha_discovery.py)
 
     t = DeviceTopics("cavatar", "carpet-01")
     t.status            # 'cavatar/carpet-01/status'
@@ -28,6 +28,7 @@ HA_PREFIX = "homeassistant"
 ONLINE = "online"
 OFFLINE = "offline"
 PRESENCE_SCHEMA = "cavatar.presence/1"
+EVENTS_SCHEMA = "cavatar.events/1"  # fall / person-down events (edge.runtime.events)
 INFO_SCHEMA = "cavatar.info/1"
 NO_ACTIVITY = "none"
 
@@ -55,7 +56,11 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec("<prefix>/<device>/bodies", "JSON, schema cavatar.bodies/1", "URL ?qos= (default 1)", False,
               "The stream: one record per frame with people, a heartbeat (people: []) when empty."),
     TopicSpec("<prefix>/<device>/presence", "JSON, schema cavatar.presence/1", "1", True,
-              "Low-rate derived state, published when the people count or the activities change."),
+              "Low-rate derived state, published when the people count or the activities change; "
+              "withdrawn (count 0) when the board is lost."),
+    TopicSpec("<prefix>/<device>/board", '"online" | "offline" (plain text)', "1", True,
+              "Board availability: \"online\" while frames arrive, \"offline\" after [source] board_timeout_s "
+              "without a good frame (unplugged, hung, bad CRCs) and on a clean stop."),
     TopicSpec("<prefix>/<device>/events", "JSON, schema cavatar.events/1", "URL ?qos= (at least 1)", False,
               "Fall and person-down events, raised and cleared (docs/falls.md); spooled while the broker is away."),
     TopicSpec("homeassistant/binary_sensor/<device>_person_down/config", "JSON, Home Assistant discovery", "1", True,
@@ -63,11 +68,22 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec("homeassistant/event/<device>_fall/config", "JSON, Home Assistant discovery", "1", True,
               "Fall event entity from the events topic; availability = status topic."),
     TopicSpec("homeassistant/binary_sensor/<device>_presence/config", "JSON, Home Assistant discovery", "1", True,
-              "Occupancy binary sensor from presence.present; availability = status topic."),
+              "Occupancy binary sensor from presence.present; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_people/config", "JSON, Home Assistant discovery", "1", True,
-              "People count sensor from presence.count; availability = status topic."),
+              "People count sensor from presence.count; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_activity/config", "JSON, Home Assistant discovery", "1", True,
-              "Activity sensor from presence.activity; availability = status topic."),
+              "Activity sensor (enum of the model's labels and none) from presence.activity; available while status "
+              "and board are online."),
+    TopicSpec("homeassistant/binary_sensor/<device>_board/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: board connected (connectivity) from the board topic; available while status is online."),
+    TopicSpec("homeassistant/sensor/<device>_fps/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: frames per second from info.health.fps."),
+    TopicSpec("homeassistant/binary_sensor/<device>_calibration_due/config", "JSON, Home Assistant discovery", "1",
+              True, "Diagnostic: calibration due (problem) from info.calibration.due."),
+    TopicSpec("homeassistant/sensor/<device>_dropped_frames/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: frames dropped or lost on the link, from info.health."),
+    TopicSpec("homeassistant/sensor/<device>_runtime_state/config", "JSON, Home Assistant discovery", "1", True,
+              "Diagnostic: runtime state (enum running/stopping/stopped/failed) from info.state."),
     TopicSpec("homeassistant/status", '"online" (subscribed)', "1", False,
               "Home Assistant's birth message; on \"online\" the discovery configs are republished."),
 )
@@ -121,6 +137,10 @@ class DeviceTopics:
         return f"{self.base}/presence"
 
     @property
+    def board(self) -> str:
+        return f"{self.base}/board"
+
+    @property
     def events(self) -> str:
         return f"{self.base}/events"
 
@@ -136,48 +156,11 @@ class DeviceTopics:
     def ha_config_topic(self, component: str, object_id: str) -> str:
         return f"{self.ha_prefix}/{component}/{self.device}_{object_id}/config"
 
-    def ha_discovery(self, sw_version: str = "") -> list[tuple[str, dict]]:
-        """Home Assistant discovery configs (topic, payload) for presence, people count, activity.
+    def ha_discovery(self, sw_version: str = "", activities: Sequence[str] | None = None) -> list[tuple[str, dict]]:
+        """Home Assistant discovery configs (topic, payload): see :mod:`edge.ha_discovery`."""
+        from edge.ha_discovery import discovery
 
-        Each entity reads the retained presence topic and is available while the status
-        topic says "online".
-        """
-        device = {
-            "identifiers": [f"cavatar_{self.device}"],
-            "name": f"CAvatar {self.device}",
-            "manufacturer": "CAvatar",
-            "model": "CAvatar Edge carpet",
-        }
-        if sw_version:
-            device["sw_version"] = sw_version
-        common = {
-            "state_topic": self.presence,
-            "availability_topic": self.status,
-            "payload_available": ONLINE,
-            "payload_not_available": OFFLINE,
-            "device": device,
-        }
-        entities = [
-            ("binary_sensor", "presence", {
-                "name": "Presence", "device_class": "occupancy",
-                "value_template": "{{ 'ON' if value_json.present else 'OFF' }}",
-                "payload_on": "ON", "payload_off": "OFF",
-            }),
-            ("sensor", "people", {
-                "name": "People", "icon": "mdi:account-group", "state_class": "measurement",
-                "unit_of_measurement": "people", "value_template": "{{ value_json.count }}",
-            }),
-            ("sensor", "activity", {
-                "name": "Activity", "icon": "mdi:run",
-                "value_template": "{{ value_json.activity }}",
-            }),
-        ]
-        out = []
-        for component, object_id, fields in entities:
-            payload = {"unique_id": f"cavatar_{self.device}_{object_id}",
-                       "object_id": f"{self.device}_{object_id}", **fields, **common}
-            out.append((self.ha_config_topic(component, object_id), payload))
-        return out
+        return discovery(self, sw_version, activities)
 
 
 def presence_payload(device: str, count: int, activities: Sequence[str], time_s: float) -> dict:

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from edge.infer.bundle import SCHEMA
+from edge.infer.bundle import SCHEMA, seal_manifest, write_manifest
 from edge.provenance import git_revision, sha256_file
 from edge.infer.normalise import NORMALISATION
 from export.model import OUTPUT_SIZES, OUTPUTS, ModelConfig
@@ -83,9 +83,7 @@ def write_bundle(out_dir: str | Path, encoder: str | Path, head: str | Path, cfg
                         "(export stage only; the runtime never reads it)"}} if weights is not None else {}),
         "files": {f: sha256_file(out / f) for f in names},
     }
-    part = out / "manifest.json.part"
-    part.write_text(json.dumps(manifest, indent=1, default=_json_default))
-    part.replace(out / "manifest.json")
+    write_manifest(out, manifest, default=_json_default)  # with its manifest.json.sha256, checked at load
     return out
 
 
@@ -196,9 +194,7 @@ def update_manifest(folder: str | Path, **fields: Any) -> None:
     mpath = Path(folder) / "manifest.json"
     manifest = json.loads(mpath.read_text())
     manifest.update(fields)
-    part = mpath.with_name(mpath.name + ".part")
-    part.write_text(json.dumps(manifest, indent=1, default=_json_default))
-    part.replace(mpath)
+    write_manifest(folder, manifest, default=_json_default)
 
 
 def load_net(folder: str | Path):
@@ -248,3 +244,27 @@ def mean_pose_baseline_cm(train_tracks, test_tracks) -> float:
     mean = np.mean(np.concatenate([t.joints_m - t.joints_m[:, :1] for t in train_tracks]), 0)
     err = np.concatenate([np.linalg.norm((t.joints_m - t.joints_m[:, :1]) - mean, axis=-1).mean(-1) for t in test_tracks])
     return float(err.mean() * 100)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m export.bundle --seal DIR``: rewrite DIR's manifest.json.sha256 for its manifest as it is now
+    (after a deliberate edit; the runtime refuses a manifest whose sidecar does not match)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m export.bundle", description=main.__doc__)
+    parser.add_argument("--seal", metavar="DIR", required=True, help="bundle folder whose manifest to seal")
+    args = parser.parse_args(argv)
+    from edge.infer.bundle import BundleError, verify
+
+    digest = seal_manifest(args.seal)
+    try:
+        verify(args.seal)
+    except BundleError as exc:
+        print(f"sealed {args.seal}/manifest.json ({digest[:12]}), but the bundle is still refused: {exc}")
+        return 2
+    print(f"sealed {args.seal}/manifest.json: SHA-256 {digest}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -5,6 +5,8 @@ TRUE pressure_kpa passed through a cheap sensor corruption at training time (per
 ×U(0.85, 1.15), per-sensel gain jitter 5 %, additive noise σ 0.1 kPa, a 0.2 kPa floor below
 which a calibrated board reads 0, saturation censoring at 14 kPa), not the raw counts through
 a calibration: it is fast, and it spans more carpets than the generator's few.
+``load_tracks(..., board=True)`` reads the board's path instead (TRAINING_INPUT_BOARD): the raw
+counts through each carpet's calibration, for datasets generated with ``--calibration``.
 
 Several people: the generator's pressure is the sum over people. Each person gets their own
 input: a loaded sensel belongs to the person whose nearest joint ground projection is
@@ -15,6 +17,7 @@ edge.scene's per-person masks). A single person's input is the whole frame.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
@@ -23,6 +26,9 @@ SATURATION_KPA = 14.0
 TRAINING_INPUT = ("true pressure_kpa with sensor corruption: gain ×U(0.85,1.15) per chunk, per-sensel gain σ 5 %, "
                   "noise σ 0.1 kPa, floor 0.2 kPa → 0, saturation at 14 kPa; other people masked out by nearest-joint "
                   "assignment of loaded sensels (dilated 2 sensels)")
+TRAINING_INPUT_BOARD = ("the board's path: raw sensor-model counts (per-carpet gains, curve, crosstalk, hysteresis, "
+                        "saturation, faults, noise) through each carpet's calibration (calibration.apply), other people "
+                        "masked out as above")
 
 
 @dataclass
@@ -71,18 +77,25 @@ def person_masks(pressure_kpa: np.ndarray, joints_m: np.ndarray, present: np.nda
     return masks
 
 
-def load_tracks(dataset, split: str, max_tracks: int | None = None) -> list[Track]:
-    """All person tracks of a split (a ``sim.dataset.Dataset`` or its path); contiguous present runs."""
+def load_tracks(dataset, split: str, max_tracks: int | None = None, board: bool = False) -> list[Track]:
+    """All person tracks of a split (a ``sim.dataset.Dataset`` or its path); contiguous present runs.
+
+    board: the input is what a board reads (TRAINING_INPUT_BOARD) — the raw counts through each
+    carpet's calibration (``cavatar sim generate --calibration installer|truth``) — instead of
+    the true pressure; the ground truth is the same. Train on it without ``corrupt``.
+    """
     from sim.dataset import Dataset
 
     ds = dataset if hasattr(dataset, "shards") else Dataset(dataset)
     pitch = float(ds.manifest["pitch_m"])
+    appliers = _board_appliers(ds) if board else None
     tracks: list[Track] = []
-    for shard in ds.shards(split=split):
+    for info, shard in ds.shards_with_info(split=split):
+        source = board_pressure(shard["counts"], appliers.get(str(info.get("carpet"))), info) if board else shard["pressure_kpa"]
         for seq in np.unique(shard["sequence"]):
             rows = np.flatnonzero(shard["sequence"] == seq)
             present = shard["present"][rows]
-            pressure = shard["pressure_kpa"][rows].astype(np.float32)
+            pressure = source[rows].astype(np.float32)
             multi = present.sum(1) > 1
             own = np.repeat(pressure[:, None], present.shape[1], 1)
             for i in np.flatnonzero(multi):
@@ -98,6 +111,25 @@ def load_tracks(dataset, split: str, max_tracks: int | None = None) -> list[Trac
                     if max_tracks and len(tracks) >= max_tracks:
                         return tracks
     return tracks
+
+
+def _board_appliers(ds) -> dict:
+    """carpet → calibration.apply.Applier for every calibration the dataset lists."""
+    from calibration.apply import Applier
+    from calibration.file import Calibration
+
+    cals = ds.manifest.get("calibrations")
+    if not cals:
+        raise ValueError(f"{ds.dir} has no calibrations; generate it with `cavatar sim generate --calibration installer` "
+                         "(or truth) to read the board's path")
+    return {carpet: Applier(Calibration.load(Path(ds.dir) / c["file"])) for carpet, c in cals.items()}
+
+
+def board_pressure(counts: np.ndarray, applier, info: dict | None = None) -> np.ndarray:
+    """(N,H,W) raw counts → (N,H,W) float16 kPa through the carpet's calibration, frame by frame."""
+    if applier is None:
+        raise ValueError(f"shard {(info or {}).get('file')} names no carpet with a calibration")
+    return np.stack([applier.apply(c).pressure_kpa for c in counts]).astype(np.float16)
 
 
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:

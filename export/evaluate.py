@@ -14,6 +14,7 @@ from typing import Callable
 
 import numpy as np
 
+from edge.infer.heading import frame_cue, resolve_sequence
 from edge.infer.normalise import center_of_pressure_m, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track, corrupt
@@ -22,9 +23,14 @@ Encode = Callable[[np.ndarray], np.ndarray]
 Head = Callable[[np.ndarray], dict]
 
 
+def track_pressure(track: Track, seed: int) -> np.ndarray:
+    """(L,H,W) float32 kPa: the track's pressure through the training corruption, deterministic for a seed."""
+    return corrupt(track.pressure_kpa.astype(np.float32), np.random.default_rng(seed)).numpy()
+
+
 def track_inputs(track: Track, pitch_m: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """(L,1,H,W) normalised inputs and (L,2) CoP in metres, deterministic for a seed."""
-    p = corrupt(track.pressure_kpa.astype(np.float32), np.random.default_rng(seed)).numpy()
+    p = track_pressure(track, seed)
     return normalise_kpa(p)[:, None], center_of_pressure_m(p, pitch_m)
 
 
@@ -43,14 +49,35 @@ def predict(inputs: np.ndarray, encode: Encode, head: Head, window: int, batch: 
     return {k: np.concatenate(v) for k, v in outs.items()}
 
 
+def scored_frames(length: int, frame_stride: int = 1, score_from: float = 0.0) -> np.ndarray:
+    """Every ``frame_stride``-th frame index from ``score_from`` × ``length`` on."""
+    return np.arange(int(np.ceil(score_from * length)), length, frame_stride)
+
+
 def predict_track(tr: Track, encode: Encode, head: Head, window: int, pitch_m: float, seed: int,
-                  frame_stride: int = 1) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """(frames, outputs) for every ``frame_stride``-th frame of one track; outputs add ``pose_aa``,
-    ``betas`` clipped to ±5 and ``transl_m`` (the relative translation put back over the CoP)."""
-    inputs, cop = track_inputs(tr, pitch_m, seed)
-    frames = np.arange(0, len(tr), frame_stride)
-    out = predict(inputs, encode, head, window, frames=frames)
+                  frame_stride: int = 1, heading: tuple | None = None,
+                  score_from: float = 0.0) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """(frames, outputs) for every ``frame_stride``-th frame of one track from ``score_from`` (a fraction of
+    its length: the model still sees the frames before, as a live stream would); outputs add ``pose_aa``,
+    ``betas`` clipped to ±5 and ``transl_m`` (the relative translation put back over the CoP).
+
+    ``heading``: (params, activity weights) of :func:`edge.infer.heading.load`: every frame of the track
+    goes through a heading resolver as on the board, ``pose_aa`` is what it publishes and
+    ``pose_aa_model`` the model's own answer."""
+    kpa = track_pressure(tr, seed)
+    inputs, cop = normalise_kpa(kpa)[:, None], center_of_pressure_m(kpa, pitch_m)
+    frames = scored_frames(len(tr), frame_stride, score_from)
+    out = predict(inputs, encode, head, window, frames=np.arange(len(tr)) if heading is not None else frames)
     out["pose_aa"] = rot6d_to_axis_angle(out["rot6d"])
+    if heading is not None:
+        params, weights = heading
+        logits = out["activity_logits"].astype(np.float64)
+        probs = np.exp(logits - logits.max(-1, keepdims=True))
+        probs /= probs.sum(-1, keepdims=True)
+        cues = np.stack([frame_cue(f, pitch_m, params) for f in kpa])
+        out["pose_aa_model"] = out["pose_aa"]
+        out["pose_aa"] = resolve_sequence(out["pose_aa"], cues, probs, params, weights)
+        out = {k: v[frames] for k, v in out.items()}
     out["betas"] = np.clip(out["betas"], -5, 5)
     out["transl_m"] = out["transl_rel_m"] + np.concatenate([cop[frames], np.zeros((len(frames), 1))], -1)
     return frames, out

@@ -18,6 +18,7 @@ it into the carpet frame, so an upright person has a global orientation of +90°
   the true global orientation: the twist about z of R_pred · R_trueᵀ (swing–twist
   decomposition), in (-π, π]. Defined for every pose, lying ones included; a tilt error alone
   gives 0.
+- ``heading_rad``: one body's heading, the same twist against the upright orientation.
 - ``pve``: mean over vertices of the pelvis-aligned vertex error.
 """
 
@@ -27,6 +28,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 UP = np.array([0.0, 0.0, 1.0])  # carpet z
+UPRIGHT_AA = np.array([np.pi / 2, 0.0, 0.0])  # the canonical Y-up body standing on the carpet
 
 
 def joint_errors(pred: np.ndarray, true: np.ndarray, root: int | None = 0) -> np.ndarray:
@@ -82,6 +84,13 @@ def local_mpjpe(body, pred_pose_aa: np.ndarray, pred_betas: np.ndarray, true_joi
     re-posed with the true global orientation. ``body`` is an ``edge.body.BodyModel``."""
     joints = body.forward(with_true_orientation(pred_pose_aa, true_pose_aa), pred_betas)["joints"]
     return mpjpe(joints, true_joints)
+
+
+def heading_rad(orient_aa: np.ndarray) -> np.ndarray:
+    """(…,3) global orientation (axis-angle) → (…) the body's heading about carpet z, radians in (-π, π]:
+    the twist about z of R · R_uprightᵀ (R_upright = +90° about x), so Rz(ψ)·R_upright has heading ψ."""
+    o = np.asarray(orient_aa, np.float64)
+    return heading_error_rad(o, np.broadcast_to(UPRIGHT_AA, o.shape))
 
 
 def heading_error_rad(pred_orient_aa: np.ndarray, true_orient_aa: np.ndarray) -> np.ndarray:

@@ -30,6 +30,7 @@ PROTOCOL_VERSION = SPEC.version
 DEFINITION_HASH = SPEC.definition_hash
 PACKING = SPEC.enums["packing"]  # name -> code
 NAK_REASON = SPEC.enums["nak_reason"]
+SIGN = SPEC.enums["sign"]  # name -> value
 PACKING_NAMES = {v: k for k, v in PACKING.items()}
 NAK_REASON_NAMES = {v: k for k, v in NAK_REASON.items()}
 _CRC = struct.Struct("<H")
@@ -376,6 +377,30 @@ def check_compatible(info: Any) -> None:
             f"this host speaks v{PROTOCOL_VERSION} (definition 0x{DEFINITION_HASH:04X}): "
             "flash firmware built from this host's firmware_protocol/protocol.toml, or install the host release that matches the firmware"
         )
+
+
+MAX_GRID = 512  # rows or cols a host accepts (the default carpet is 96×96; 512×512 u16 frames are 0.5 MB)
+_PACKING_BITS = {PACKING["u8"]: 8, PACKING["packed12"]: 12, PACKING["u16"]: 16}
+
+
+def info_range_problems(info: Any) -> list[str]:
+    """What makes a decoded INFO insane for a host to act on (empty: none). The wire format can carry
+    any value; a host must not size buffers or scale readings by them unchecked."""
+    problems = []
+    for key in ("rows", "cols"):
+        value = getattr(info, key)
+        if not 1 <= value <= MAX_GRID:
+            problems.append(f"{key} {value} (1..{MAX_GRID})")
+    if not 8 <= info.adc_bits <= 16:
+        problems.append(f"adc_bits {info.adc_bits} (8..16)")
+    if info.sign not in SIGN.values():
+        problems.append(f"sign {info.sign} (one of {sorted(SIGN.values())})")
+    capacity = _PACKING_BITS.get(info.packing)
+    if capacity is None:
+        problems.append(f"packing {info.packing} (one of {sorted(_PACKING_BITS)})")
+    elif info.adc_bits > capacity:
+        problems.append(f"adc_bits {info.adc_bits} do not fit packing {PACKING_NAMES[info.packing]} ({capacity} bits)")
+    return problems
 
 
 def encode_command(name: str, seq: int, **fields: Any) -> bytes:

@@ -35,6 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     g.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     g.add_argument("--activities", default=None, help="comma-separated subset of the activities (default: the paper's ten)")
+    g.add_argument("--calibration", choices=("installer", "truth"), default=None,
+                   help="also write each carpet's calibration: the guided procedure acted out on it (installer) or its "
+                   "true parameters (truth), so training and evaluation can read counts → calibration → kPa")
     g.set_defaults(func=run_generate)
     sh = s.add_parser("show", help="draw one frame: raw counts, true pressure and the bodies",
                       description="Draw frame I of a dataset to a PNG: raw counts, true pressure, bodies from above and the side.")
@@ -42,6 +45,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     sh.add_argument("--frame", type=int, default=0, help="frame index over the whole dataset")
     sh.add_argument("--png", required=True, help="output PNG")
     sh.set_defaults(func=run_show)
+    au = s.add_parser("audit", help="measure the simulator against the literature (fidelity report)",
+                      description="Generate a few subjects of every activity and check balance, force, foot roll, region "
+                      "loads and variety against published ranges; writes audit.json and audit.md.")
+    au.add_argument("--out", default="docs/sim/audit", help="output folder (default docs/sim/audit)")
+    au.add_argument("--subjects", type=int, default=3, help="subjects per activity (default 3)")
+    au.add_argument("--seconds", type=float, default=12.0, help="seconds per activity (default 12)")
+    au.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    au.set_defaults(func=run_audit)
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
 
 
@@ -55,13 +66,28 @@ def run_generate(args: argparse.Namespace) -> int:
         raise CliError("--subjects must be at least 1")
     try:
         out = generate(args.out, subjects=args.subjects, seconds_per_activity=args.seconds_per_activity, people=args.people,
-                       grid=args.grid, pitch_mm=pitch, seed=args.seed, activities=acts, workers=args.workers)
+                       grid=args.grid, pitch_mm=pitch, seed=args.seed, activities=acts, workers=args.workers,
+                       calibration=args.calibration)
     except (DatasetError, ValueError) as exc:
         raise CliError(str(exc)) from None
     from sim.dataset import Dataset
 
     ds = Dataset(out)
     print(f"wrote {len(ds)} frames in {len(ds.manifest['shards'])} shards to {out}")
+    return 0
+
+
+def run_audit(args: argparse.Namespace) -> int:
+    import sys
+
+    from sim.audit import run_audit as audit, write_report
+
+    if args.subjects < 1 or args.seconds < 6:
+        raise CliError("--subjects must be at least 1 and --seconds at least 6 (the floor activities need the time)")
+    report = audit(subjects=args.subjects, seconds=args.seconds, seed=args.seed,
+                   progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    j, m = write_report(report, args.out)
+    print(f"{report['summary']['in_range']} of {report['summary']['total']} checks in range; wrote {j} and {m}")
     return 0
 
 

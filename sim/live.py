@@ -146,7 +146,8 @@ class LiveCarpet:
                  rate_hz: float = 14.0, adc_bits: int = 12, chunk_s: float = 10.0, body: str = "lite",
                  activities: tuple[str, ...] = PAPER_ACTIVITIES + ("walking",), prefetch: bool = False) -> None:
         from edge.body import BodyModel
-        from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
+        from sim.contact import ContactModel, regional_tissue, subject_mass_kg
+        from sim.contact.segments import SegmentMassModel
         from sim.motion import Subject
 
         if rows != cols or rows not in (96, 48, 32):
@@ -160,9 +161,10 @@ class LiveCarpet:
         self.body_name = body
         self.body = BodyModel.load(body)
         self.contact = ContactModel(rows, cols, pitch_m=self.pitch_m)
-        self.tissue = tissue_stiffness(self.body)
+        self.tissue = regional_tissue(self.body)
         self.subjects = [Subject.random(i, seed * 1000 + i) for i in range(people)]
         self.mass_kg = [subject_mass_kg(self.body, s.betas) for s in self.subjects]
+        self.mass_models = [SegmentMassModel(self.body, s.betas) for s in self.subjects]  # COM independent of pose
         self.sensor = live_sensor(seed, rows, adc_bits, pitch_mm)
         self.sign = int(self.sensor.config.frontend.sign)
         self.adc_bits = int(self.sensor.config.frontend.adc_bits)
@@ -216,9 +218,11 @@ class LiveCarpet:
 
     def pressure_kpa(self, k: int) -> np.ndarray:
         total = np.zeros((self.rows, self.cols), np.float32)
-        for person, mass in zip(self.truth(k), self.mass_kg):
+        for person, mass, mm in zip(self.truth(k), self.mass_kg, self.mass_models):
             v = self.body.forward(person["pose_aa"][None], person["betas"][None], person["transl_m"][None], vertices=True)
-            res = self.contact.pressure_kpa(v["vertices"][0], self.body.faces, mass, static=True, tissue_kpa_per_mm=self.tissue)
+            com = mm.com_m(person["pose_aa"][None], person["transl_m"][None])[0]
+            res = self.contact.pressure_kpa(v["vertices"][0], self.body.faces, mass, com_m=com, static=True,
+                                            tissue_kpa_per_mm=self.tissue)
             total += res.pressure_kpa
         return total
 

@@ -25,12 +25,12 @@ def sheet(activity: str, out: Path, seed: int = 2, seconds: float = 6.0) -> Path
 
     from edge.body import BodyModel
     from edge.body.render import _draw_view
-    from sim.contact import ContactModel, mesh_centroid_m, subject_mass_kg, tissue_stiffness
+    from sim.contact import ContactModel, mesh_centroid_m, subject_mass_kg, regional_tissue
     from sim.motion import Subject, person_track
 
     body = BodyModel.load("lite")
     carpet = ContactModel(96, 96, pitch_m=0.01905)
-    tissue = tissue_stiffness(body)
+    tissue = regional_tissue(body)
     subject = Subject.random(seed, seed)
     track = person_track(subject, [activity], seconds, 14.0, rng=seed, model=body, start_xy=(0.9, 0.9))
     n = len(track)

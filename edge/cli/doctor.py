@@ -28,8 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=__doc__.split("\n\n")[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--config", metavar="FILE", help="TOML configuration to check (default: the built-in defaults of "
-                   "`cavatar run`; the service uses /etc/cavatar/cavatar.toml)")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration to check (default, as `cavatar run`: "
+                   "$CAVATAR_CONFIG, else /etc/cavatar/cavatar.toml when it exists, else the built-in defaults)")
     p.add_argument("--no-open", action="store_true", help="do not open the board to wait for its INFO packet")
     p.add_argument("--json", action="store_true", help="print the findings as JSON")
     p.set_defaults(func=run)
@@ -38,9 +38,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from edge.runtime.doctor import FAIL, OK, WARN, as_json, diagnose, exit_code
 
-    findings = diagnose(args.config, open_board=not args.no_open)
+    from edge.runtime.config_choice import choose_config
+
+    choice = choose_config(args.config)
+    findings = diagnose(choice.path, open_board=not args.no_open, config_reason=choice.reason)
     if args.json:
-        print(json.dumps(as_json(findings, args.config), indent=1))
+        print(json.dumps(as_json(findings, choice.path), indent=1))
         return exit_code(findings)
     for f in findings:
         print(f.line())

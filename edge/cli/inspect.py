@@ -72,4 +72,8 @@ def run(args: argparse.Namespace) -> int:
     c = summary["counters"]
     print(f"  decoder: {c['decoder']['packets']} packets, dropped {c['decoder']['dropped'] or 0}, missed {c['decoder']['missed']}")
     print(f"  frames: {c.get('frames', {})}")
+    if c["source"].get("board_mismatch"):  # another board's INFO in the capture: its frames were held back
+        print(f"  another board answered {c['source']['board_mismatch']} time(s), "
+              f"{c['source'].get('packets_board_mismatch', 0)} of its packets not used"
+              + (f"; at the end: {c['board_mismatch']}" if c.get("board_mismatch") else ""))
     return 0

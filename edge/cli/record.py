@@ -36,7 +36,11 @@ def run(args: argparse.Namespace) -> int:
     part = args.out + ".part"
     got = 0
     try:
-        with open(part, "wb") as fh:
+        fh = open(part, "wb")  # before the board is opened: an unwritable destination wastes no recording
+    except OSError as exc:
+        raise CliError(f"cannot write {args.out}: {exc.strerror or exc}; give a path in a folder you can write") from None
+    try:
+        with fh:
             try:
                 source = open_source(args.source, record_to=fh, queue_frames=1024)
                 source.start()

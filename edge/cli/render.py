@@ -111,9 +111,12 @@ def run(args) -> int:
     except ValueError as exc:
         raise CliError(f"bad body parameters: {exc}") from None
     title = f"{record.get('device', '?')} seq {record.get('seq', '?')}: tracks {', '.join(map(str, ids))}"
-    render_png(
-        args.png, list(out["vertices"]), model.faces, views=views, title=title,
-        joints=list(out["joints"]) if args.skeleton else None, parents=model.parents,
-    )
+    try:
+        render_png(
+            args.png, list(out["vertices"]), model.faces, views=views, title=title,
+            joints=list(out["joints"]) if args.skeleton else None, parents=model.parents,
+        )
+    except OSError as exc:
+        raise CliError(f"cannot write {args.png}: {exc.strerror or exc}; give --png a path in a folder you can write") from None
     print(args.png)
     return 0

@@ -4,17 +4,26 @@
     feats = b.encode(b.normalise(pressure_kpa)[:, None])        # (B,1,H,W) → (B,F), once per frame
     out = b.head(window_feats, origin_m=cop)                    # (B,40,F) → pose_aa, betas, transl_m, …
 
-A bundle is a folder (design.md): ``encoder.onnx``, ``head.onnx``, ``manifest.json``. Loading
-REFUSES (BundleError, naming the file, the expected and the actual value) a bundle whose files
-do not match their SHA-256 in the manifest, whose grid differs from the carpet's, whose graphs
-disagree with the manifest, or whose body model differs from the one it was trained with.
+A bundle is a folder (design.md): ``encoder.onnx``, ``head.onnx``, ``manifest.json`` and
+``manifest.json.sha256`` (the manifest's own SHA-256, ``sha256sum`` format, written with it by
+:func:`write_manifest`). Loading REFUSES (BundleError, one line naming the file, the expected
+and the actual value) a bundle whose manifest does not match its sidecar hash, whose manifest
+values are out of range (:func:`check_manifest`), which lists a file outside the bundle folder
+(or a link), whose files do not match their SHA-256 in the manifest, whose grid differs from the
+carpet's, whose graphs disagree with the manifest, or whose body model differs from the one it
+was trained with.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import math
+import os
+import re
+import stat
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -25,6 +34,12 @@ from edge.infer.rotations import rot6d_to_axis_angle
 SCHEMA = "cavatar.bundle/1"
 GRAPHS = ("encoder.onnx", "head.onnx")
 HEAD_OUTPUTS = ("rot6d", "betas", "transl_rel_m", "activity_logits", "confidence")
+MANIFEST = "manifest.json"
+SIDECAR = "manifest.json.sha256"
+MANIFEST_MAX_BYTES = 1 << 20
+MAX_GRID = 512
+FILE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")  # a plain file name in the bundle folder
+HEX64 = re.compile(r"^[0-9a-f]{64}$")
 
 
 class BundleError(Exception):
@@ -43,26 +58,82 @@ def session_options(threads: int = 1):
     return opts
 
 
-def verify(path: str | Path, grid: tuple[int, int] | None = None) -> dict[str, Any]:
-    """Check a bundle folder's manifest, file hashes and grid; return the manifest or raise BundleError."""
-    folder = Path(path)
-    mpath = folder / "manifest.json"
-    if not mpath.is_file():
-        raise BundleError(f"{folder}: no manifest.json (not a model bundle)")
+def write_manifest(folder: str | Path, manifest: dict[str, Any], default: Callable[[Any], Any] | None = None) -> Path:
+    """Write ``manifest.json`` and its ``manifest.json.sha256`` sidecar, each atomically (the only way a
+    manifest should be written: a manifest without a matching sidecar is refused at load)."""
+    folder = Path(folder)
+    data = (json.dumps(manifest, indent=1, default=default) + "\n").encode()
+    _replace(folder / MANIFEST, data)
+    _replace(folder / SIDECAR, f"{hashlib.sha256(data).hexdigest()}  {MANIFEST}\n".encode())
+    return folder / MANIFEST
+
+
+def seal_manifest(folder: str | Path) -> str:
+    """(Re)write the sidecar for the manifest.json as it is now; its SHA-256. For a manifest edited on purpose."""
+    folder = Path(folder)
+    data = (folder / MANIFEST).read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    _replace(folder / SIDECAR, f"{digest}  {MANIFEST}\n".encode())
+    return digest
+
+
+def _replace(path: Path, data: bytes) -> None:
+    part = path.with_name(path.name + ".part")
+    part.write_bytes(data)
+    part.replace(path)
+
+
+def _read_plain(path: Path, limit: int) -> bytes:
+    """A regular file (not a link) of at most ``limit`` bytes; BundleError otherwise."""
     try:
-        manifest = json.loads(mpath.read_text())
-    except (OSError, ValueError) as exc:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        raise BundleError(f"{path}: missing") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise BundleError(f"{path}: not a regular file (a link or a device); a bundle holds plain files only")
+    if st.st_size > limit:
+        raise BundleError(f"{path}: {st.st_size} bytes, more than a manifest ever holds ({limit})")
+    return path.read_bytes()
+
+
+def verify(path: str | Path, grid: tuple[int, int] | None = None) -> dict[str, Any]:
+    """Check a bundle folder's manifest (its sidecar hash and values), file hashes and grid; return the
+    manifest or raise BundleError."""
+    folder = Path(path)
+    mpath = folder / MANIFEST
+    if not os.path.lexists(mpath):
+        raise BundleError(f"{folder}: no manifest.json (not a model bundle)")
+    data = _read_plain(mpath, MANIFEST_MAX_BYTES)
+    if not os.path.lexists(folder / SIDECAR):
+        raise BundleError(f"{folder}: no {SIDECAR} beside the manifest, so its content is unprotected; re-export the "
+                          "bundle (`cavatar bundle`), reinstall the package, or after a deliberate edit run "
+                          f"`python -m export.bundle --seal {folder}`")
+    side = _read_plain(folder / SIDECAR, 4096).decode(errors="replace").split()
+    expected = side[0].lower() if side else ""
+    actual = hashlib.sha256(data).hexdigest()
+    if expected != actual:
+        raise BundleError(f"{mpath}: SHA-256 {actual}, {SIDECAR} expects {expected or '(nothing)'}: the manifest was "
+                          "edited or damaged; re-export the bundle or reinstall the package")
+    try:
+        manifest = json.loads(data)
+    except ValueError as exc:
         raise BundleError(f"{mpath}: unreadable manifest ({exc})") from None
+    if not isinstance(manifest, dict):
+        raise BundleError(f"{mpath}: the manifest is not a JSON object")
     if manifest.get("schema") != SCHEMA:
         raise BundleError(f"{mpath}: schema {manifest.get('schema')!r}, this runtime reads {SCHEMA!r}")
-    files = manifest.get("files", {})
+    check_manifest(manifest, mpath)
+    files = manifest["files"]
     for name in GRAPHS:
         if name not in files:
             raise BundleError(f"{mpath}: {name} is not listed in the manifest's files")
+    root = folder.resolve()
     for name, expected in files.items():
         f = folder / name
-        if not f.is_file():
+        if not os.path.lexists(f):
             raise BundleError(f"{folder}: {name} is listed in the manifest but missing")
+        if f.is_symlink() or not f.is_file() or f.resolve().parent != root:
+            raise BundleError(f"{folder}: {name} is a link or not a plain file in the bundle folder; refused")
         actual = sha256_file(f)
         if actual != expected:
             raise BundleError(f"{f}: SHA-256 mismatch: manifest expects {expected}, file has {actual} (tampered or corrupt)")
@@ -71,6 +142,53 @@ def verify(path: str | Path, grid: tuple[int, int] | None = None) -> dict[str, A
         raise BundleError(f"{folder}: the bundle is for a {bundle_grid[0]}×{bundle_grid[1]} carpet, "
                           f"this carpet is {grid[0]}×{grid[1]}")
     return manifest
+
+
+def _int_in(value: Any, lo: int, hi: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi
+
+
+def _float_in(value: Any, lo: float, hi: float) -> bool:
+    return (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            and lo < value <= hi)
+
+
+def check_manifest(m: dict[str, Any], where: Path | str = MANIFEST) -> None:
+    """BundleError (one line, every problem) unless the values the runtime uses are in range."""
+    bad: list[str] = []
+
+    def need(ok: bool, key: str, rule: str) -> None:
+        if not ok:
+            bad.append(f"{key} {json.dumps(_get(m, key))[:60]} ({rule})")
+
+    need(isinstance(m.get("name"), str) and FILE_NAME.match(m.get("name") or "") is not None, "name",
+         "letters, digits, '.', '_', '-'")
+    g = m.get("grid")
+    need(isinstance(g, list) and len(g) == 2 and all(_int_in(x, 1, MAX_GRID) for x in g), "grid",
+         f"two integers 1..{MAX_GRID}")
+    need(_float_in(m.get("pitch_m"), 0.0, 0.2), "pitch_m", "metres, 0 < pitch <= 0.2")
+    need(_int_in(m.get("window"), 1, 1000), "window", "an integer 1..1000")
+    need(_int_in(m.get("features"), 1, 8192), "features", "an integer 1..8192")
+    norm = _get(m, "input.normalisation")
+    need(isinstance(norm, dict) and norm.get("kind") == NORMALISATION["kind"], "input.normalisation.kind",
+         f"{NORMALISATION['kind']!r}")
+    need(_float_in(_get(m, "input.normalisation.scale_kpa"), 0.0, 1e6), "input.normalisation.scale_kpa",
+         "kPa, 0 < scale <= 1e6")
+    acts = m.get("activities")
+    need(isinstance(acts, list) and 1 <= len(acts) <= 256 and all(isinstance(a, str) and 0 < len(a) <= 64 for a in acts),
+         "activities", "1..256 names")
+    files = m.get("files")
+    need(isinstance(files, dict) and all(isinstance(k, str) and FILE_NAME.match(k) and k not in (MANIFEST, SIDECAR)
+                                         and isinstance(v, str) and HEX64.match(v) for k, v in files.items()),
+         "files", "plain file names in the bundle folder → lowercase SHA-256")
+    if bad:
+        raise BundleError(f"{where}: values out of range: " + "; ".join(bad) + ". Re-export the bundle (`cavatar bundle`).")
+
+
+def _get(m: Any, dotted: str) -> Any:
+    for key in dotted.split("."):
+        m = m.get(key) if isinstance(m, dict) else None
+    return m
 
 
 class ModelBundle:

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from dataclasses import dataclass
@@ -69,8 +70,10 @@ def _how_to_calibrate(scheme: str, url: str) -> str:
                "--board board.bin --stance stance.bin --holdout holdout.bin --mass KG --out calibration.npz` "
                "(record each step with `cavatar record`)")
     else:
-        how = (f"run the guided calibration on this carpet once: `cavatar calibrate --source '{url}' --mass KG "
-               "--out /var/lib/cavatar/calibration.npz` (KG: the mass of the person doing the poses)")
+        how = ("run the guided calibration on this carpet once, as the service user who owns /var/lib/cavatar and "
+               "with the service stopped (it holds the port): `sudo systemctl stop cavatar; sudo -u cavatar cavatar "
+               f"calibrate --source '{url}' --mass KG --out /var/lib/cavatar/calibration.npz` (KG: the mass of the "
+               "person doing the poses)")
     return (f"no calibration for {url}: a real carpet's readings mean nothing until it is calibrated. To fix it, {how}; "
             "then start again with `cavatar run --calibration /var/lib/cavatar/calibration.npz` (or set "
             "[calibration] file in the configuration).")
@@ -95,6 +98,14 @@ def _sim_calibration(url: str, out_dir: Path, say: Callable[[str], None]) -> Cho
             say(f"calibration: {path} is for another virtual carpet; calibrating again")
         except CalibrationError as exc:
             say(f"calibration: {path} cannot be used ({exc}); calibrating again")
+    try:  # before the 20-s session, not after it
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not os.access(path.parent, os.W_OK):
+            raise PermissionError("not writable by this user")
+    except OSError as exc:
+        raise SetupError(f"the virtual carpet's calibration is kept beside the status file, but {path.parent} cannot be "
+                         f"written ({exc.strerror or exc}); set [runtime] status_file (--status-file) to a writable place, "
+                         "or pass --calibration FILE") from None
     t0 = time.monotonic()
     cal = run_sim_session(opts["seed"], opts["grid"], opts["bits"], opts["pitch_mm"], path)
     say(f"calibration: no calibration file, so the virtual carpet sim-{opts['seed']} was calibrated as an installer "

@@ -70,6 +70,11 @@ def _at_least_one(v: Any) -> str | None:
     return None if v >= 1 else "must be ≥ 1"
 
 
+def _between(lo: int, hi: int) -> Callable[[Any], str | None]:
+    """A bounded count: a huge one would hang or exhaust the board rather than fail."""
+    return lambda v: f"must be ≥ {lo}" if v < lo else (f"must be ≤ {hi}" if v > hi else None)
+
+
 def _device_id(v: str) -> str | None:
     from edge.topics import check_level
 
@@ -149,9 +154,12 @@ class SourceSection:
                   _source_url)
     queue_frames: int = _f(4, "frames held between the reader thread and the pipeline; when the pipeline falls behind a "
                               "live board the oldest is dropped (counted), so it always works on the newest frame",
-                           _at_least_one)
+                           _between(1, 1024))
     missing_rows: str = _f("drop", "a frame with rows lost on the link: 'drop' it, or 'flag' (repair up to 4 rows from "
                                    "the last good frame)", _missing_rows)
+    board_timeout_s: float = _f(5.0, "no good frame from the board for this long → the board is reported unavailable "
+                                     "(MQTT board topic \"offline\", presence withdrawn, one WARNING); the first good "
+                                     "frame after it → available again (one WARNING)", _positive)
 
 
 @dataclass(frozen=True)
@@ -172,7 +180,9 @@ class ModelSection:
 
     bundle: str = _f("", "model bundle folder; empty: the shipped bundle (edge/models/lean-96)")
     threads: int = _f(1, "onnxruntime intra-op threads per model (1 suits a 2-core board: the reader and "
-                         "publisher threads need the other core)", _at_least_one)
+                         "publisher threads need the other core)", _between(1, 64))
+    resolve_heading: bool = _f(True, "turn a body the model publishes facing backwards (180° about the vertical) when "
+                                     "the feet's pressure says so, per track (edge/infer/heading.py)")
 
 
 @dataclass(frozen=True)
@@ -184,7 +194,7 @@ class SinksSection:
                          "mqtt://user@host:1883/prefix?qos=1&spool=DIR (password from $CAVATAR_MQTT_PASSWORD)",
                          _sink_urls)
     queue_records: int = _f(256, "records held between the pipeline and the publisher thread; when full the oldest "
-                                 "is dropped (counted)", _at_least_one)
+                                 "is dropped (counted)", _between(1, 100_000))
 
 
 @dataclass(frozen=True)
@@ -200,7 +210,7 @@ class RuntimeSection:
                        _positive)
     heartbeat_s: float = _f(1.0, "while nobody is on the carpet, a heartbeat record (people: []) this often "
                                  "(and at once when the carpet becomes empty)", _positive)
-    timing_window: int = _f(512, "per-stage milliseconds are median / p99 over this many recent frames", _at_least_one)
+    timing_window: int = _f(512, "per-stage milliseconds are median / p99 over this many recent frames", _between(1, 100_000))
 
 
 SECTIONS: dict[str, type] = {
@@ -296,6 +306,8 @@ def load_config(path: str | Path) -> RuntimeConfig:
         values = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError([f"not valid TOML: {exc}"], str(p)) from None
+    except RecursionError:  # a hostile file nested thousands deep
+        raise ConfigError(["nested too deeply to be a configuration"], str(p)) from None
     return RuntimeConfig.from_dict(values, str(p))
 
 

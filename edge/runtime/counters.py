@@ -98,6 +98,7 @@ WORK_COUNTERS = (
     "still_reuses",         # people whose pressure was unchanged: last result reused, no encoder, no head
     "tracks_started",       # feature windows opened
     "tracks_freed",         # feature windows freed (the scene lost the track)
+    "heading_turned",       # people published turned 180° about the vertical (edge.infer.heading)
 )
 PUBLISH_COUNTERS = (
     "records",              # records queued with people
@@ -106,6 +107,7 @@ PUBLISH_COUNTERS = (
     "published",            # records handed to every sink
     "sink_errors",          # sink publish calls that raised (logged; the record may be lost for that sink)
     "info_published",       # info payloads handed to the sinks
+    "seq_unreserved",       # records not published: their seq could not be reserved on disk (edge.runtime.seq)
 )
 
 

@@ -82,12 +82,14 @@ class Board:
 
 
 def diagnose(config_path: str | Path | None, *, open_board: bool = True, timeout_s: float = 2.0,
-             env: Mapping[str, str] | None = None, now: datetime | None = None, usb_backend: Any = None) -> list[Finding]:
-    """Every check (see the module doc) for the configuration at ``config_path`` (None: the built-in defaults)."""
+             env: Mapping[str, str] | None = None, now: datetime | None = None, usb_backend: Any = None,
+             config_reason: str = "--config") -> list[Finding]:
+    """Every check (see the module doc) for the configuration at ``config_path`` (None: the built-in defaults);
+    ``config_reason``: why that one (edge.runtime.config_choice), said in the config finding."""
     env = os.environ if env is None else env
     now = now or datetime.now(timezone.utc)
     out = check_python() + check_onnxruntime()
-    cfg, finding = load(config_path)
+    cfg, finding = load(config_path, config_reason)
     out.append(finding)
     if cfg is None:
         return out
@@ -180,7 +182,7 @@ def check_onnxruntime() -> list[Finding]:
     return out
 
 
-def load(config_path: str | Path | None) -> tuple[Any, Finding]:
+def load(config_path: str | Path | None, reason: str = "--config") -> tuple[Any, Finding]:
     """(configuration or None, the ``config`` finding)."""
     from edge.runtime.config import ConfigError, RuntimeConfig, load_config
 
@@ -196,7 +198,7 @@ def load(config_path: str | Path | None) -> tuple[Any, Finding]:
         return None, Finding("config", FAIL, f"{exc.source}: {'; '.join(exc.problems)}. Fix it (`cavatar config "
                              "validate FILE`, `cavatar config show` describes every key), then run doctor again: "
                              "the other checks need a valid configuration")
-    return cfg, Finding("config", OK, f"{config_path} is valid (device {cfg.device.id})")
+    return cfg, Finding("config", OK, f"{config_path} ({reason}) is valid (device {cfg.device.id})")
 
 
 # ----------------------------------------------------------------------------- source and board

@@ -22,8 +22,7 @@ import time
 from typing import Any
 
 from edge.scene.falls import FallConfig, FallDetector
-
-EVENTS_SCHEMA = "cavatar.events/1"
+from edge.topics import EVENTS_SCHEMA
 
 
 def event_payload(device: str, event: dict, time_s: float) -> dict:
@@ -81,11 +80,16 @@ class EventStage:
         return [event_payload(self.device, e, now) for e in self.detector.reset(self._last_t_s, reason)]
 
 
-def ha_event_discovery(topics: Any, device: dict) -> list[tuple[str, dict]]:
-    """Home Assistant discovery (topic, payload): a "Person down" binary sensor and a "Fall" event entity,
-    both reading the events topic and available while the board's status topic says online."""
-    common = {"state_topic": topics.events, "availability_topic": topics.status, "payload_available": "online",
-              "payload_not_available": "offline", "device": device}
+def ha_event_discovery(topics: Any, device: dict, origin: dict | None = None) -> list[tuple[str, dict]]:
+    """Home Assistant discovery (topic, payload): a "Person down" binary sensor and a "Fall" event entity on
+    the events topic, shaped as edge.ha_discovery's (the same device and origin); available only while the
+    runtime (status) and the board (board) are online, like the carpet's other entities."""
+    from edge.ha_discovery import entity_slug
+    from edge.topics import OFFLINE, ONLINE
+
+    common = {"state_topic": topics.events, "availability_mode": "all",
+              "availability": [{"topic": t, "payload_available": ONLINE, "payload_not_available": OFFLINE}
+                               for t in (topics.status, topics.board)]}
     down = {"name": "Person down", "device_class": "safety", "payload_on": "ON", "payload_off": "OFF",
             "value_template": "{% if value_json.type == 'person_down' %}"
                               "{{ 'ON' if value_json.state == 'raised' else 'OFF' }}{% endif %}"}
@@ -93,10 +97,13 @@ def ha_event_discovery(topics: Any, device: dict) -> list[tuple[str, dict]]:
             "value_template": "{% if value_json.type == 'fall' and value_json.state == 'raised' %}"
                               "{\"event_type\":\"fall\",\"track_id\":{{ value_json.track_id }},"
                               "\"confidence\":{{ value_json.confidence }}}{% endif %}"}
+    slug = entity_slug(topics.device)
     out = []
     for component, object_id, fields in (("binary_sensor", "person_down", down), ("event", "fall", fall)):
-        payload = {"unique_id": f"cavatar_{topics.device}_{object_id}", "object_id": f"{topics.device}_{object_id}",
-                   **fields, **common}
+        payload = {"unique_id": f"cavatar_{topics.device}_{object_id}", "default_entity_id": f"{component}.{slug}_{object_id}",
+                   **common, **fields, "device": device}
+        if origin:
+            payload["origin"] = origin
         out.append((topics.ha_config_topic(component, object_id), payload))
     return out
 

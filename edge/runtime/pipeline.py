@@ -30,6 +30,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from edge import __version__
+from edge.runtime.board_health import LOST, BoardHealth
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, SetupError, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
@@ -65,6 +67,8 @@ class Runtime:
         self.stages: FrameStages | None = None
         self.events: Any = None  # edge.runtime.events.EventStage when [events] enabled
         self.publisher: Publisher | None = None
+        self.seqs: Any = None  # edge.runtime.seq.SeqLedger while set up
+        self._seq_start = 0
         self.on_outcome: list[Callable[[FrameOutcome], None]] = []  # called in the pipeline thread (tests, the demo)
         self._stop = threading.Event()
         self._ended = threading.Event()
@@ -76,10 +80,32 @@ class Runtime:
         self._fps_mark: tuple[float, int] | None = None
         self._lock = threading.Lock()
         self._stopped = False
+        self.board: BoardHealth | None = None  # made at start(): frames arriving or not ([source] board_timeout_s)
+        self.notifier = Notifier.from_environment()  # systemd Type=notify: READY, STATUS, WATCHDOG (no-op elsewhere)
 
     # ------------------------------------------------------------------ setup
     def setup(self) -> None:
         """Load and check everything; open the sinks last, so a refusal leaves no output behind. SetupError."""
+        from edge.runtime.seq import SeqLedger, SeqLedgerBusy, SeqLedgerError
+
+        status = self.config.status_path()
+        ledger = SeqLedger(status, self.config.device.id)
+        try:  # first: a second runtime on this status file is refused before it touches the board
+            self._seq_start = ledger.open(at_least=self._previous_seq() + 1)
+        except (SeqLedgerBusy, SeqLedgerError) as exc:
+            raise SetupError(str(exc)) from None
+        except OSError as exc:
+            raise SetupError(f"status file {status}: cannot be written, nor its seq ledger beside it ({exc}); set [runtime] "
+                             "status_file (--status-file) to a writable place") from None
+        self.seqs = ledger
+        try:
+            self._setup()
+        except BaseException:
+            ledger.discard()
+            self.seqs = None
+            raise
+
+    def _setup(self) -> None:
         from calibration.runtime import CalibratedFrames
         from edge.infer import BundleError, ModelBundle
         from edge.runtime.reader import open_timed_source
@@ -123,7 +149,8 @@ class Runtime:
             scene = SceneTracker(grid[0], grid[1], cal.pitch_m, cfg.scene)
             self.stages = FrameStages(calibrated, scene, self.bundle, device=cfg.device.id, times=self.times,
                                       counters=self.counters, invalid=self.invalid,
-                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._previous_seq() + 1)
+                                      heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._seq_start,
+                                      resolve_heading=cfg.model.resolve_heading)
             status = cfg.status_path()
             try:
                 status.parent.mkdir(parents=True, exist_ok=True)
@@ -183,6 +210,7 @@ class Runtime:
         if self.state != "ready":
             raise RuntimeError(f"cannot start a runtime that is {self.state}")
         self._started_wall, self._started_mono = self.clock(), time.monotonic()
+        self.board = BoardHealth(self.config.source.board_timeout_s, self._started_mono)
         self.state = "running"
         self.publisher.start()
         self.write_status()
@@ -191,6 +219,7 @@ class Runtime:
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
+        self.notifier.ready(f"running: {self.config.source.url.split('?')[0]}")
 
     def request_stop(self) -> None:
         """Ask every thread to finish (safe from a signal handler); :meth:`stop` completes it."""
@@ -201,17 +230,21 @@ class Runtime:
         return self._ended.wait(timeout_s)
 
     def stop(self, timeout_s: float = 10.0) -> dict:
-        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'."""
+        """Stop cleanly: reader, pipeline, publisher drained, sinks closed ("offline"), status 'stopped'.
+
+        Bounded: everything within ``timeout_s`` (a sink that does not finish by then is abandoned)."""
         with self._lock:
             if self._stopped:
                 return self.snapshot()
             self._stopped = True
+        deadline = time.monotonic() + timeout_s
         self._stop.set()
+        self.notifier.stopping("stopping: publishing what is queued, closing the sinks")
         if self.state == "running":
             self.state = "stopping"
             self.write_status()
         for t in self._threads:
-            t.join(timeout=timeout_s)
+            t.join(timeout=max(0.0, deadline - time.monotonic()))
         if self.source is not None:
             try:
                 self.source.stop()
@@ -220,10 +253,12 @@ class Runtime:
         if self.publisher is not None:
             if self.state in ("stopping", "failed"):
                 self.publisher.put_info(self.info(state="stopped" if self.error is None else "failed"))
-            self.publisher.close(timeout_s)
+            self.publisher.close(max(0.5, deadline - time.monotonic()))
         if self.state != "new":
             self.state = "failed" if self.error else "stopped"
             self.write_status()
+        if self.seqs is not None:
+            self.seqs.close(next_seq=self.stages.seq if self.stages is not None else None)
         return self.snapshot()
 
     def run_for(self, frames: int | None = None, seconds: float | None = None, timeout_s: float = 120.0) -> dict:
@@ -249,6 +284,8 @@ class Runtime:
                 got = False
                 for frame in src.frames(timeout_s=0.2):
                     got = True
+                    self.board.frame(time.monotonic(), self._source_stats())
+                    self._watch_board()
                     temperature = None
                     if getattr(src, "last_status", None) is not last_status:
                         last_status = src.last_status
@@ -263,7 +300,7 @@ class Runtime:
                             log.exception("frame %d failed", frame.index)
                         out = None
                     if out is not None:
-                        if out.record is not None:
+                        if out.record is not None and self._reserve_seq(out.record["seq"]):
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
@@ -276,6 +313,7 @@ class Runtime:
                         self._stop.set()
                     if self._stop.is_set():
                         break
+                self._watch_board()
                 if deadline is not None and time.monotonic() >= deadline:
                     self.end_reason = f"ran {seconds:g} s"
                     break
@@ -297,8 +335,42 @@ class Runtime:
             self._ended.set()
             self._stop.set()
 
+    def _reserve_seq(self, seq: int) -> bool:
+        """True once ``seq`` is reserved on disk (edge.runtime.seq); a record whose seq is not is never published."""
+        try:
+            self.seqs.reserve(seq)
+            return True
+        except OSError as exc:
+            if not self.counters.get("seq_unreserved"):
+                log.error("seq ledger %s: %s; records are not published until it can be written", self.seqs.path, exc)
+            self.counters.add("seq_unreserved")
+            return False
+
     def _limit_reached(self) -> bool:
         return self._frame_limit is not None and self.counters.get("frames_in") >= self._frame_limit
+
+    def _watch_board(self) -> None:
+        """Pipeline thread: a board transition is logged once (WARNING, the journal's level), presence is withdrawn
+        when the board is lost (nobody is claimed on a carpet we cannot see), and the info (board_connected) goes to
+        the sinks at once (MQTT: the retained board topic, Home Assistant's carpet entities' availability).
+        Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
+        self.notifier.watchdog()
+        now = time.monotonic()
+        if not self.board.due(now):
+            return
+        change = self.board.check(now, self._source_stats())
+        if change is None:
+            return
+        from edge.sinks import redact
+
+        where = redact(self.config.source.url)
+        if change.state == LOST:
+            log.warning("board %s: %s; reported unavailable (presence withdrawn) until frames arrive again",
+                        where, change.reason)
+            self.publisher.put_presence(0, [])
+        else:
+            log.warning("board %s: frames again after %.1f s without; reported available", where, change.after_s)
+        self.publisher.put_info(self.info())
 
     def _monitor_loop(self) -> None:
         rt = self.config.runtime
@@ -306,6 +378,11 @@ class Runtime:
         while not self._stop.wait(rt.status_s):
             try:
                 self.write_status()
+                if self.notifier.active:  # one line for `systemctl status cavatar`
+                    s = self.snapshot()
+                    health = s["board_health"] or {}
+                    self.notifier.status(f"board lost: {health.get('reason')}" if health.get("connected") is False else
+                                         f"{self._fps:.1f} fps, {s['people']} people, {s['publish']['published']} published")
                 if time.monotonic() >= next_info:
                     next_info += rt.info_s
                     self.publisher.put_info(self.info())
@@ -346,6 +423,9 @@ class Runtime:
                      "adc_bits": int(info.adc_bits), "rate_hz": round(info.rate_mhz / 1000.0, 3),
                      "firmware": f"{info.fw_major}.{info.fw_minor}.{info.fw_patch}",
                      "protocol_version": int(info.protocol_version)}
+        state = self.state
+        if state == "running" and st.get("board_mismatch"):
+            state = "board_mismatch"  # another board answered: frames held back (edge.sources.carpet)
         src_queue = dict(st.get("source", {}))
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
@@ -358,6 +438,8 @@ class Runtime:
         publish["queued"] = self.publisher.queued() if self.publisher else 0
         publish["last_seq"] = self.publisher.last_seq if self.publisher else None
         uptime = time.monotonic() - self._started_mono if self._started_mono else 0.0
+        board_health = self.board.as_dict(time.monotonic()) if self.board is not None else None
+        board_lost = board_health is not None and not board_health["connected"]
         publish["sinks"] = {}
         for sink in self.sinks or []:
             try:
@@ -365,15 +447,16 @@ class Runtime:
             except Exception as exc:
                 publish["sinks"][redact(sink.describe())] = {"error": str(exc)}
         return {
-            "schema": SCHEMA, "device": self.config.device.id, "state": self.state, "error": self.error,
+            "schema": SCHEMA, "device": self.config.device.id, "state": state, "error": self.error,
             "end_reason": self.end_reason, "pid": os.getpid(), "version": __version__,
             "started": self._started_wall, "updated": now,
             "uptime_s": round(uptime, 3), "fps": round(self._fps, 2),
             "fps_mean": round(c.get("frames_in", 0) / uptime, 2) if uptime > 0 else 0.0,
-            "people": self.stages.people_now if self.stages else 0,
+            "people": self.stages.people_now if self.stages and not board_lost else 0,
+            "board_health": board_health,
             "source": {"url": redact(self.config.source.url), "board": board, "queue": src_queue,
                        "decoder": st.get("decoder", {}), "assembly": st.get("frames", {}),
-                       "board_status": st.get("board_status", {})},
+                       "board_status": st.get("board_status", {}), "board_mismatch": st.get("board_mismatch")},
             "frames": frames, "invalid_reasons": self.invalid.snapshot(), "work": work,
             "stages_ms": self.times.summary(), "publish": publish,
             "calibration": self._calibration_status(now), "model": self._model_status(),
@@ -426,11 +509,14 @@ class Runtime:
             "body_model": s["model"].get("body_model"), "board_device_id": board.get("device_id"),
             "firmware": board.get("firmware"), "protocol_version": board.get("protocol_version"),
             "grid": [board.get("rows"), board.get("cols")] if board else None, "rate_hz": board.get("rate_hz"),
+            "board_connected": None if s["board_health"] is None else s["board_health"]["connected"],
+            "activities": list(self.bundle.activities) if self.bundle is not None else None,
             "calibration": {"sha256": cal.get("sha256"), "created": cal.get("created"), "age_days": cal.get("age_days"),
                             "max_age_days": cal.get("max_age_days"), "due": cal.get("due"), "automatic": cal.get("automatic")},
             "started": s["started"], "uptime_s": s["uptime_s"],
             "health": {
                 "fps": s["fps"], "people": s["people"], "frames_in": fr["frames_in"],
+                "last_frame_age_s": None if s["board_health"] is None else s["board_health"]["last_frame_age_s"],
                 "frames_dropped": s["source"]["queue"].get("dropped_slow_consumer", 0),
                 "frames_lost_on_link": asm.get("crc_mismatch", 0) + asm.get("torn_dropped", 0) + asm.get("missed_frames", 0),
                 "decoder_dropped": decoder_dropped, "frames_invalid": fr["frames_invalid"],

@@ -17,6 +17,11 @@ Only the work the scene needs (docs/runtime.md):
 
 A new track's window is its first frame's features repeated (FeatureWindow, as in training),
 so the head runs from the track's first confirmed frame and its result is published at once.
+
+With ``resolve_heading`` (the default) each inferred person's global orientation goes through
+their track's :class:`edge.infer.heading.HeadingResolver`: turned 180° about the vertical when
+the feet's pressure says the model faces backwards (parameters: edge/infer/heading.json, or
+``heading_params`` — a path to another fitted file).
 """
 
 from __future__ import annotations
@@ -30,9 +35,10 @@ import numpy as np
 
 from edge.frames import RawFrame
 from edge.infer import FeatureWindow
+from edge.infer import heading as heading_cue
 from edge.record import heartbeat, make_person, make_record
 from edge.runtime.counters import Counters, StageTimes
-from edge.runtime.model_input import batch_inputs
+from edge.runtime.model_input import batch_inputs, input_limits, person_pressure_kpa
 from edge.runtime.tracks import PersonResult, TrackBook
 
 log = logging.getLogger(__name__)
@@ -54,7 +60,7 @@ class FrameStages:
 
     def __init__(self, calibrated: Any, scene: Any, bundle: Any, *, device: str, times: StageTimes, counters: Counters,
                  invalid: Counters | None = None, heartbeat_s: float = 1.0, seq_start: int = 0,
-                 adaptive: bool = True) -> None:
+                 adaptive: bool = True, resolve_heading: bool = True, heading_params: str | None = None) -> None:
         self.calibrated, self.scene, self.bundle = calibrated, scene, bundle
         # adaptive=False is the always-infer baseline of bench/speed_error.py: no still reuse, and the model
         # also runs on frames with nobody (the whole carpet as one input, into a window of its own; nothing
@@ -68,7 +74,11 @@ class FrameStages:
         self.invalid = invalid if invalid is not None else Counters()
         self.heartbeat_s = float(heartbeat_s)
         self.seq = int(seq_start)  # the next record's seq
-        self.tracks = TrackBook(bundle.window, bundle.features)
+        self.resolve_heading = bool(resolve_heading)
+        heading = heading_cue.load(heading_params, self.activities) if self.resolve_heading else None
+        self._pitch_m = float(bundle.pitch_m)
+        self._input_limits = input_limits(bundle.manifest)
+        self.tracks = TrackBook(bundle.window, bundle.features, heading)
         self.people_now = 0
         self._last_heartbeat_t: float | None = None
         self._was_people = True  # so the first empty frame sends a heartbeat at once
@@ -139,12 +149,13 @@ class FrameStages:
                 st.window.push(f)
             windows = np.concatenate([st.window.window() for _, st in run])
             out = bundle.head(windows, origins)
-            times.add("head", (time.perf_counter() - t1) * 1e3)
+            poses = self._resolve_heading(pressure, run, out) if self.resolve_heading else out["pose_aa"]
+            times.add("head", (time.perf_counter() - t1) * 1e3)  # the heading resolution counts as the head's
             c.add("encoder_runs", len(run))
             c.add("head_runs", len(run))
             for i, (_, st) in enumerate(run):
                 st.result = PersonResult(
-                    transl_m=out["transl_m"][i], pose_aa=out["pose_aa"][i], betas=out["betas"][i],
+                    transl_m=out["transl_m"][i], pose_aa=poses[i], betas=out["betas"][i],
                     confidence=float(np.clip(out["confidence"][i], 0.0, 1.0)),
                     activity=self.activities[int(np.argmax(out["activity_probs"][i]))], features=feats[i].copy())
         t2 = time.perf_counter()
@@ -159,6 +170,19 @@ class FrameStages:
         return record, tuple(p["activity"] for p in people)
 
     # ------------------------------------------------------------------ helpers
+    def _resolve_heading(self, pressure: np.ndarray, run: list, out: dict) -> list[np.ndarray]:
+        """Each inferred person's pose_aa through their track's heading resolver; counts the turned ones."""
+        floor, sat = self._input_limits
+        poses, turned = [], 0
+        for i, (person, st) in enumerate(run):
+            kpa = person_pressure_kpa(pressure, person.mask, floor, sat)  # what the model saw
+            before = st.heading.flips
+            poses.append(st.heading.resolve(out["pose_aa"][i], kpa, self._pitch_m, out["activity_probs"][i]))
+            turned += st.heading.flips - before
+        if turned:
+            self.counters.add("heading_turned", turned)
+        return poses
+
     def _infer_idle(self, cal: Any) -> None:
         """adaptive=False on a frame with no confirmed person: encoder + head on the whole carpet."""
         masked = cal.masked if cal.masked.any() else None

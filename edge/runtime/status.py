@@ -1,14 +1,15 @@
 """The status file: the runtime's health, rewritten atomically every second; and how to print it.
 
 Schema ``cavatar.status/1`` (JSON). Top level: schema, device, state (running, stopping,
-stopped, failed), error, end_reason, pid, version, started, updated (Unix seconds),
+stopped, failed; board_mismatch while another board answers and its frames are held back), error, end_reason, pid, version, started, updated (Unix seconds),
 uptime_s, fps (over the last status period), fps_mean (over the run), people (confirmed
 people in the last frame), and the groups:
 
 - ``source``: url (password redacted), board (device id, grid, ADC bits, rate, firmware),
   ``queue`` (frames dropped for a slow pipeline, reconnects, stalls), ``decoder`` (packets,
   bytes, dropped by reason, e.g. bad_crc, missed), ``assembly`` (crc_mismatch, torn_dropped,
-  missed_frames, duplicate_frames, …), ``board_status`` (the board's last STATUS packet);
+  missed_frames, duplicate_frames, …), ``board_status`` (the board's last STATUS packet),
+  ``board_mismatch`` (why frames are held back: another board's identity; null otherwise);
 - ``frames``: frames_in, frames_invalid, frames_empty, frames_unconfirmed, frames_people,
   frames_failed; ``invalid_reasons``: reason → count;
 - ``work``: person_frames, encoder_runs, head_runs, still_reuses, tracks_started,
@@ -24,7 +25,6 @@ people in the last frame), and the groups:
 from __future__ import annotations
 
 import json
-import os
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -33,14 +33,14 @@ SCHEMA = "cavatar.status/1"
 
 
 def write_status(path: str | Path, status: dict[str, Any]) -> None:
-    """Write ``status`` to ``path`` atomically (a temporary file beside it, then os.replace)."""
+    """Write ``status`` to ``path`` atomically (edge.atomic: a temporary file beside it, then a rename). Not fsynced:
+    it is rewritten every second, on a tmpfs (/run/cavatar) in the service, and a reader never sees half of it."""
+    from edge.atomic import write_atomic
+
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(status, f, indent=1, sort_keys=False, allow_nan=False, default=_jsonable)
-        f.write("\n")
-    os.replace(tmp, p)
+    text = json.dumps(status, indent=1, sort_keys=False, allow_nan=False, default=_jsonable) + "\n"
+    write_atomic(p, text, durable=False)
 
 
 def _jsonable(obj: Any) -> Any:
@@ -86,6 +86,15 @@ def _when(t: float | None) -> str:
     return datetime.fromtimestamp(t, timezone.utc).astimezone().strftime("%Y-%m-%d %H:%M:%S")
 
 
+def _board_line(health: dict[str, Any] | None) -> str:
+    if not health:
+        return "  board health: -"
+    if health.get("connected"):
+        return f"  board health: connected (last frame {health.get('last_frame_age_s', 0):.1f} s ago)"
+    return (f"  board health: LOST, reported unavailable — {health.get('reason') or 'no frames'} "
+            f"(last frame {health.get('last_frame_age_s', 0):.0f} s ago; limit {health.get('timeout_s')} s)")
+
+
 def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
     """A readable multi-line report of a status dict (what `cavatar status` prints)."""
     import time
@@ -102,12 +111,15 @@ def format_status(s: dict[str, Any], now_s: float | None = None) -> str:
     ]
     board = src.get("board") or {}
     q, dec, asm = src.get("queue", {}), src.get("decoder", {}), src.get("assembly", {})
+    if src.get("board_mismatch"):
+        lines.append(f"  BOARD MISMATCH, nothing published: {src['board_mismatch']}")
     lines += [
         f"source {src.get('url')}: board {board.get('device_id', '-')} {board.get('rows', '?')}x{board.get('cols', '?')}, "
         f"{board.get('adc_bits', '?')}-bit, {board.get('rate_hz', '?')} Hz, firmware {board.get('firmware', '-')}",
         f"  {s.get('fps', 0):.1f} fps now, {s.get('fps_mean', 0):.1f} on average; dropped for a slow pipeline "
         f"{q.get('dropped_slow_consumer', 0)}, "
         f"reconnects {q.get('reconnects', 0)}, stalls {q.get('stalls', 0)}",
+        _board_line(s.get("board_health")),
         f"  decoder: {dec.get('packets', 0)} packets, dropped {dec.get('dropped_total', 0)}{_reasons(dec.get('dropped'))}, "
         f"missed {dec.get('missed', 0)}; frames: crc mismatch {asm.get('crc_mismatch', 0)}, "
         f"torn {asm.get('torn_dropped', 0)}, missed {asm.get('missed_frames', 0)}, duplicate {asm.get('duplicate_frames', 0)}",

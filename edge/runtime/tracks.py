@@ -13,6 +13,7 @@ from typing import Iterable
 import numpy as np
 
 from edge.infer import FeatureWindow
+from edge.infer.heading import HeadingParams, HeadingResolver
 
 
 @dataclass
@@ -33,13 +34,17 @@ class TrackState:
     window: FeatureWindow
     result: PersonResult | None = None
     frames: int = 0  # frames this track was inferred or reused
+    heading: HeadingResolver | None = None  # the track's 180° resolution (FrameStages(resolve_heading=True))
 
 
 class TrackBook:
-    """track_id → TrackState; opens and frees feature windows."""
+    """track_id → TrackState; opens and frees feature windows (and heading resolvers, given ``heading``:
+    the parameters and per-activity cue weights of :func:`edge.infer.heading.load`)."""
 
-    def __init__(self, window: int, features: int) -> None:
+    def __init__(self, window: int, features: int,
+                 heading: tuple[HeadingParams, np.ndarray | None] | None = None) -> None:
         self.window, self.features = int(window), int(features)
+        self.heading = heading
         self.tracks: dict[int, TrackState] = {}
 
     def get(self, track_id: int) -> tuple[TrackState, bool]:
@@ -47,7 +52,8 @@ class TrackBook:
         st = self.tracks.get(track_id)
         if st is not None:
             return st, False
-        st = TrackState(track_id, FeatureWindow(self.window, self.features))
+        st = TrackState(track_id, FeatureWindow(self.window, self.features),
+                        heading=HeadingResolver(*self.heading) if self.heading is not None else None)
         self.tracks[track_id] = st
         return st, True
 

@@ -48,9 +48,14 @@ class SceneConfig:
     grow_fraction: float = _f(0.5, "a contact grows (8-connected) over sensels above this fraction of the start threshold")
     min_blob_area_cm2: float = _f(6.0, "contacts smaller than this are ignored")
     # --- grouping blobs into people -----------------------------------------------------
-    group_radius_m: float = _f(0.6, "contacts closer than this (centre to centre, single linkage) belong to one person unless tracks say otherwise")
-    attach_radius_m: float = _f(0.45, "a contact keeps the track it overlapped last frame only within this of the track's predicted centre")
-    min_person_force_n: float = _f(80.0, "a new person needs at least this total force (a child of 8 kg) to start a track")
+    group_radius_m: float = _f(0.6, "contacts no track reaches belong to one new person when all lie within this of each other (centre to centre)")
+    reach_m: float = _f(0.6, "a new contact joins a body within this beyond the body's extent (its farthest contact from its centre): a stride, a hand put down")
+    extent_memory_s: float = _f(2.0, "a body's extent is forgotten with this time constant (someone who lay down and stood up)")
+    split_distance_m: float = _f(1.5, "one track's contacts in parts farther apart than this (centre to centre) for split_s become two tracks; a push-up spans 1.3 m")
+    split_s: float = _f(0.5, "how long a split must be seen (parts too far apart, or a part carrying more than the body's weight) before it is made")
+    newcomer_s: float = _f(0.5, "contacts that joined a body at most this long before it began to carry more than its weight can be split off as someone who stepped in beside it")
+    weight_tau_s: float = _f(3.0, "time constant of a body's weight estimate (the force of its contacts)")
+    min_person_force_n: float = _f(80.0, "a new person needs at least this total force (a child of 8 kg) to start a track; a track carrying this much more than its weight has someone beside it")
     mask_margin_mm: float = _f(40.0, "each person's mask is their contacts grown by this margin (never onto another person's contacts)")
     # --- tracking -----------------------------------------------------------------------
     track_gate_m: float = _f(0.5, "an unassigned person matches a track (Hungarian, on distance) only within this of its prediction")
@@ -87,7 +92,8 @@ class SceneConfig:
         for name in nonneg:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be ≥ 0, got {getattr(self, name)}")
-        positive = ("noise_update_s", "start_sigmas", "group_radius_m", "attach_radius_m", "track_gate_m",
+        positive = ("noise_update_s", "start_sigmas", "group_radius_m", "reach_m", "extent_memory_s",
+                    "split_distance_m", "split_s", "newcomer_s", "weight_tau_s", "track_gate_m",
                     "max_speed_m_s", "coast_s", "reid_radius_m", "cop_min_cutoff_hz", "force_min_cutoff_hz", "derivative_cutoff_hz")
         for name in positive:
             if getattr(self, name) <= 0:

@@ -1,32 +1,60 @@
-"""Grouping contacts into people.
+"""Grouping contacts into people: what one body can reach, and what it weighs.
 
-A person is one or more contacts (feet, hands, knees). Distance alone cannot split two
-people standing close (their inner feet can be nearer than one person's two feet in a
-long step), so grouping combines distance with what the tracker already knows:
+A person is one or more contacts (feet, hands, knees, buttocks, a whole lying body). Distance
+alone cannot tell one person's contacts from two people's: a lunge puts one person's feet
+0.7 m apart and a push-up their hands and feet 1.3 m apart, while two people standing side by
+side have feet 0.3 m apart. So grouping uses what each track already is:
 
-1. distance: contacts whose centres are within ``group_radius_m`` of each other
-   (transitively: single linkage, ``scipy.sparse.csgraph.connected_components``) form a
-   cluster;
-2. prior: a contact that overlaps the sensels a track owned in the previous frame
-   belongs to that track (majority of overlapping sensels; a stance foot does not move),
-   provided it lies within ``attach_radius_m`` of the track's predicted centre (someone
-   stepping onto a footprint another person just left must not inherit them);
-3. a cluster whose contacts carry priors of two or more tracks is split between them:
-   contacts without a prior go to the nearest of those tracks' predicted centres;
-   a cluster with one track's priors is that track; one with none is new (key 0);
-4. a track whose priors fall in several clusters keeps the cluster nearest its
-   prediction; the others are new (people who were merged, walking apart).
-
-New groups (key 0) are matched to the remaining tracks by the tracker (Hungarian on
-distance with a gate), or start new tracks.
+1. prior: a contact that overlaps the sensels a track owned in the previous frame stays with
+   that track (majority of overlapping sensels: a stance foot does not move), provided it lies
+   within the track's reach;
+2. reach: each other contact joins the track that reaches it best, the least distance to the
+   track's predicted centre in units of the track's reach (several contacts may join one track:
+   two hands put down at once), among the tracks whose kept contacts still carry
+   ANCHOR_FRACTION of their weight (one whose contacts all lifted is matched again as a whole by
+   the tracker). A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
+   from its centre (slowly forgotten), so a lying body reaches farther than a standing one;
+3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
+   ``split_distance_m`` apart (two people who were one track walking apart), or a track
+   carrying more than its own weight by HEAVY_FRACTION of it with a part that carries the
+   excess while the rest still carries KEEP_FRACTION of the weight (someone stepping in beside
+   it: a foot that lifts and lands, or a back put down, moves weight; it adds none);
+4. contacts no track reaches are new: clustered so that all of a cluster's contacts lie within
+   ``group_radius_m`` of each other (two people side by side are not chained into one), each
+   cluster is a group with key 0, which the tracker matches to coasting tracks (Hungarian on
+   distance, ``linear_sum_assignment``) or starts as a new track.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial.distance import cdist
+from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.spatial.distance import cdist, pdist
+
+
+@dataclass(frozen=True, slots=True)
+class Body:
+    """What grouping needs to know of one track: predicted centre (2,) m, reach m, weight N
+    (None until known), and for how many frames each kind of split has been seen."""
+
+    centre_m: np.ndarray
+    reach_m: float
+    weight_n: float | None = None
+    far_frames: int = 0
+    heavy_frames: int = 0
+
+
+# Someone stepping in adds at least this fraction of the body's own weight: a person's force on the
+# board's path varies by ±30 % with posture (contact area, saturation), a newcomer adds a whole person.
+HEAVY_FRACTION = 0.5
+# ... and the body's own contacts still carry this fraction of its weight.
+KEEP_FRACTION = 0.8
+# A body reaches out only while the contacts it kept carry this fraction of its weight: a foot lands
+# while the other carries the body; contacts fading out while others appear (someone jumping away,
+# the simulator moving everyone at once) carry no weight and must not pull the new ones in.
+ANCHOR_FRACTION = 0.3
 
 
 def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -> np.ndarray:
@@ -51,53 +79,182 @@ def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -
     return out
 
 
-def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
-    """(n, 2) points → (n,) cluster index; points within radius_m (transitively) share one."""
+def within_span(centres_m: np.ndarray, span_m: float) -> np.ndarray:
+    """(n, 2) points → (n,) cluster index: complete linkage, every two points of a cluster within span_m.
+
+    Unlike single linkage this does not chain two people standing side by side (each one's feet
+    0.2 m apart, the nearest feet of the two 0.3 m apart) into one.
+    """
     if len(centres_m) <= 1:
         return np.zeros(len(centres_m), dtype=np.int64)
-    adjacent = cdist(centres_m, centres_m) <= radius_m
-    _, comp = connected_components(csr_matrix(adjacent), directed=False)
-    return comp
+    return fcluster(linkage(pdist(centres_m), method="complete"), t=span_m, criterion="distance") - 1
+
+
+def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
+    """(n, 2) points → (n,) cluster index; points within radius_m (transitively) share one.
+
+    A handful of contacts: the reachability matrix is squared until it stops growing (log2 n
+    products of an n×n boolean matrix) instead of building a sparse graph.
+    """
+    n = len(centres_m)
+    if n <= 1:
+        return np.zeros(n, dtype=np.int64)
+    reach = cdist(centres_m, centres_m) <= radius_m
+    while True:
+        wider = (reach.astype(np.uint8) @ reach.astype(np.uint8)) > 0
+        if (wider == reach).all():
+            break
+        reach = wider
+    return np.unique(reach.argmax(axis=1), return_inverse=True)[1].astype(np.int64)
+
+
+@dataclass(frozen=True, slots=True)
+class Grouping:
+    """groups: [(blob indices, track key or 0 for new)]; far, heavy: keys whose split evidence grew this frame."""
+
+    groups: list[tuple[np.ndarray, int]]
+    far: frozenset[int]
+    heavy: frozenset[int]
 
 
 def group_blobs(
     centres_m: np.ndarray,
+    forces_n: np.ndarray,
     priors: np.ndarray,
-    predicted_m: dict[int, np.ndarray],
+    bodies: dict[int, Body],
     group_radius_m: float,
-    attach_radius_m: float,
-) -> list[tuple[np.ndarray, int]]:
-    """Blob centres (n, 2), prior keys (n,) and track predictions {key: (2,)} → [(blob indices, key or 0)]."""
+    split_distance_m: float,
+    min_person_force_n: float,
+    split_frames: int,
+    ages_s: np.ndarray | None = None,
+    newcomer_s: float = 0.5,
+    frame_s: float = 1 / 14,
+) -> Grouping:
+    """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs.
+
+    ages_s: (n,) how long each blob has been with its prior track (0 for new contacts); only
+    contacts that joined a track at most newcomer_s before it began to carry more than its weight
+    can be split off as someone stepping in (frame_s: the frame interval, to count back).
+    """
     n = len(centres_m)
     if n == 0:
-        return []
-    prior = np.zeros(n, dtype=np.int64)
+        return Grouping([], frozenset(), frozenset())
+    owner = np.zeros(n, dtype=np.int64)
     for i in range(n):
         k = int(priors[i])
-        if k in predicted_m and np.linalg.norm(centres_m[i] - predicted_m[k]) <= attach_radius_m:
-            prior[i] = k
-    cluster = single_linkage(centres_m, group_radius_m)
+        if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
+            owner[i] = k
+    anchored = {}
+    for k in np.unique(owner[owner > 0]):
+        body = bodies[int(k)]
+        kept_n = float(forces_n[owner == k].sum())
+        if body.weight_n is None or kept_n >= ANCHOR_FRACTION * body.weight_n:
+            anchored[int(k)] = body
+    _reach(centres_m, owner, anchored)  # a track that lost its footing is found again by the tracker, as a whole
+    ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
-    claims: dict[int, list[int]] = {}  # key -> indices into groups
-    for c in np.unique(cluster):
-        idx = np.nonzero(cluster == c)[0]
-        keys = [int(k) for k in np.unique(prior[idx]) if k > 0]
-        if len(keys) <= 1:
-            parts = [(idx, keys[0] if keys else 0)]
-        else:
-            pred = np.array([predicted_m[k] for k in keys])
-            owner = np.array(keys)[cdist(centres_m[idx], pred).argmin(axis=1)]
-            owner = np.where(prior[idx] > 0, prior[idx], owner)
-            parts = [(idx[owner == k], k) for k in keys]
-        for part in parts:
-            if part[1]:
-                claims.setdefault(part[1], []).append(len(groups))
-            groups.append(part)
-    for k, gi in claims.items():
-        if len(gi) > 1:  # one track's contacts in several clusters: the nearest keeps it
-            dist = [np.linalg.norm(centres_m[groups[g][0]].mean(axis=0) - predicted_m[k]) for g in gi]
-            keep = gi[int(np.argmin(dist))]
-            for g in gi:
-                if g != keep:
-                    groups[g] = (groups[g][0], 0)
-    return groups
+    far, heavy = set(), set()
+    for k in np.unique(owner[owner > 0]):
+        k = int(k)
+        idx = np.flatnonzero(owner == k)
+        parts = _split_far(centres_m[idx], forces_n[idx], split_distance_m)
+        if parts is not None:
+            far.add(k)
+            if bodies[k].far_frames + 1 >= split_frames:
+                keep, rest = parts
+                groups += [(idx[keep], k), (idx[rest], 0)]
+                continue
+        recent = ages[idx] <= newcomer_s + bodies[k].heavy_frames * frame_s
+        part = _split_heavy(centres_m[idx], forces_n[idx], recent, bodies[k], group_radius_m, min_person_force_n)
+        if part is not None:
+            heavy.add(k)
+            if bodies[k].heavy_frames + 1 >= split_frames:
+                groups += [(idx[~part], k), (idx[part], 0)]
+                continue
+        groups.append((idx, k))
+    new = np.flatnonzero(owner == 0)
+    if len(new):
+        cluster = _new_people(centres_m[new], forces_n[new], group_radius_m, 0.25 * min_person_force_n)
+        groups += [(new[cluster == c], 0) for c in np.unique(cluster)]
+    return Grouping(groups, frozenset(far), frozenset(heavy))
+
+
+def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, faint_n: float) -> np.ndarray:
+    """(n,) cluster index of contacts no track reaches: the contacts carrying faint_n or more clustered
+    within span_m; fainter ones (a contact fading out, a toe) join the nearest cluster, or one of their own."""
+    strong = forces_n >= faint_n
+    if strong.all() or not strong.any():
+        return within_span(centres_m, span_m)
+    cluster = np.empty(len(centres_m), dtype=np.int64)
+    cluster[strong] = within_span(centres_m[strong], span_m)
+    d = cdist(centres_m[~strong], centres_m[strong])
+    nearest = d.argmin(axis=1)
+    own = d[np.arange(len(nearest)), nearest] > span_m
+    faint = cluster[strong][nearest]
+    faint[own] = cluster[strong].max() + 1 + np.arange(int(own.sum()))
+    cluster[~strong] = faint
+    return cluster
+
+
+def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
+    """Give each unowned blob to the body that reaches it best (in place on ``owner``): the least distance to
+    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands)."""
+    free = np.flatnonzero(owner == 0)
+    if len(free) == 0 or not bodies:
+        return
+    keys = np.array(list(bodies))
+    pred = np.array([bodies[k].centre_m for k in keys])
+    reach = np.array([bodies[k].reach_m for k in keys])
+    d = cdist(centres_m[free], pred) / reach  # (free, bodies)
+    best = d.argmin(axis=1)
+    ok = d[np.arange(len(free)), best] <= 1.0
+    owner[free[ok]] = keys[best[ok]]
+
+
+def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(keep, rest) bool masks when the contacts fall in parts more than split_distance_m apart (the heaviest part keeps)."""
+    if len(centres_m) < 2 or pdist(centres_m).max() <= split_distance_m:  # the usual case, at once
+        return None
+    comp = single_linkage(centres_m, split_distance_m)
+    if comp.max() == 0:
+        return None
+    heaviest = int(np.argmax(np.bincount(comp, weights=forces_n)))
+    return comp == heaviest, comp != heaviest
+
+
+def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray, body: Body, group_radius_m: float,
+                 min_person_force_n: float) -> np.ndarray | None:
+    """Mask of the contacts that carry a track's excess weight (someone stepping in beside it), or None.
+
+    The excess must reach HEAVY_FRACTION of the body's weight (and min_person_force_n). Candidates are
+    the clusters of contacts that joined the track lately (``recent``, all within group_radius_m of
+    each other) and, failing those, single contacts (a foot put where the other person's had just
+    been inherits that footprint's track); the one whose force is nearest the excess is the newcomer,
+    provided it carries at least half the excess and the rest still carries KEEP_FRACTION of the
+    body's weight: someone lying back moves weight from buttocks to shoulders (and on the board's
+    path reads heavier, spread over more sensels), someone stepping in takes none from the body.
+    """
+    if body.weight_n is None or len(centres_m) < 2:
+        return None
+    total = float(forces_n.sum())
+    excess = total - body.weight_n
+    if excess < max(min_person_force_n, HEAVY_FRACTION * body.weight_n):
+        return None
+
+    def fits(f: float) -> bool:  # carries the excess, and took no weight from the body (a back put down does)
+        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= max(min_person_force_n, KEEP_FRACTION * body.weight_n)
+
+    idx = np.flatnonzero(recent)
+    parts = []
+    if len(idx):
+        comp = within_span(centres_m[idx], group_radius_m)
+        parts = [idx[comp == c] for c in np.unique(comp)]
+        parts = [p for p in parts if fits(float(forces_n[p].sum()))]
+    if not parts:
+        parts = [np.array([i]) for i in range(len(centres_m)) if fits(float(forces_n[i]))]
+    if not parts:
+        return None
+    best = min(parts, key=lambda p: abs(float(forces_n[p].sum()) - excess))
+    part = np.zeros(len(centres_m), dtype=bool)
+    part[best] = True
+    return part

@@ -86,7 +86,9 @@ class SceneTracker:
         self._noise_fixed = cfg.noise_kpa is not None
         self._noise_t_s: float | None = None
         self._last_t_s: float | None = None
+        self._dt_s = 1.0 / 14.0  # the frame interval, followed as frames come (sets split_s in frames)
         self._prev_keys: np.ndarray | None = None
+        self._prev_join: np.ndarray | None = None  # (H, W) when each contact sensel's blob joined its track, s
         self.counters: dict[str, int] = {"frames": 0, "valid": 0, "empty": 0, "still": 0,
                                          **{f"rejected_{r}": 0 for r in REASONS}}
         self.last_timings_ms: dict[str, float] = {}
@@ -136,6 +138,8 @@ class SceneTracker:
             return SceneFrame(float(t_s) if isinstance(t_s, (int, float)) else float("nan"), False, reason, [], False, False,
                               noise_now, None, dict(c))
         t_s = float(t_s)
+        if self._last_t_s is not None and 0.0 < t_s - self._last_t_s < 1.0:
+            self._dt_s += 0.1 * (t_s - self._last_t_s - self._dt_s)
         self._last_t_s = t_s
         c["valid"] += 1
         t1 = time.perf_counter()
@@ -168,11 +172,16 @@ class SceneTracker:
         cfg = self.config
         if not blobs:
             self.people.step([], [], t_s)
-            self._prev_keys = None
+            self._prev_keys = self._prev_join = None
             return []
         centres = np.array([b.cop_m for b in blobs])
+        forces = np.array([b.force_n for b in blobs])
         priors = prior_keys(labels, len(blobs), self._prev_keys)
-        groups = group_blobs(centres, priors, self.people.predictions(t_s), cfg.group_radius_m, cfg.attach_radius_m)
+        joined = self._joined_s(labels, priors, t_s)
+        split_frames = max(1, int(round(cfg.split_s / self._dt_s)))
+        grouping = group_blobs(centres, forces, priors, self.people.bodies(t_s), cfg.group_radius_m, cfg.split_distance_m,
+                               cfg.min_person_force_n, split_frames, t_s - joined, cfg.newcomer_s, self._dt_s)
+        groups = grouping.groups
         lut = np.zeros(len(blobs) + 1, dtype=np.int32)
         for g, (idx, _) in enumerate(groups):
             lut[idx + 1] = g + 1
@@ -195,10 +204,20 @@ class SceneTracker:
             obs.append(Observation(cop_m=cop, force_n=total * sensel_m2 * 1e3))
             masks.append(mask)
         tracks = self.people.step(obs, [k for _, k in groups], t_s)
+        for (idx, key), tr, o in zip(groups, tracks, obs):
+            if tr is not None:
+                extent = float(np.max(np.linalg.norm(centres[idx] - o.cop_m, axis=1)))
+                self.people.observe_body(tr, extent, float(forces[idx].sum()), tr.key in grouping.far,
+                                         tr.key in grouping.heavy, self._dt_s)
         keys = np.zeros(len(groups) + 1, dtype=np.int32)
         for g, tr in enumerate(tracks):
             keys[g + 1] = 0 if tr is None else tr.key
         self._prev_keys = keys[owner]
+        blob_key = np.zeros(len(blobs) + 1, dtype=np.int64)
+        for (idx, _), tr in zip(groups, tracks):
+            blob_key[idx + 1] = 0 if tr is None else tr.key
+        kept = blob_key[1:] == priors  # a blob keeps its join time while it stays with its track
+        self._prev_join = np.concatenate([[np.nan], np.where(kept, joined, t_s)])[labels]
         out = []
         for (idx, _), tr, o, mask in zip(groups, tracks, obs, masks):
             if tr is None or tr.track_id is None:
@@ -208,6 +227,18 @@ class SceneTracker:
                 area_m2=float(sum(blobs[i].area_m2 for i in idx)), velocity_m_s=tr.velocity_m_s.copy(), mask=mask,
                 bbox=_bbox(mask), contacts=len(idx), still=self._stillness(tr, filtered, mask), age_s=t_s - tr.first_t_s))
         return out
+
+    def _joined_s(self, labels: np.ndarray, priors: np.ndarray, t_s: float) -> np.ndarray:
+        """(n_blobs,) when each blob's contact joined the track it had last frame (its prior); t_s for new ones."""
+        n = len(priors)
+        if self._prev_join is None or not priors.any():
+            return np.full(n, t_s)
+        same = (labels > 0) & (self._prev_keys == np.concatenate([[0], priors])[labels]) & (self._prev_keys > 0)
+        if not same.any():
+            return np.full(n, t_s)
+        latest = np.full(n, -np.inf)
+        np.maximum.at(latest, labels[same] - 1, self._prev_join[same])  # only the contact sensels: cheap
+        return np.where(np.isfinite(latest), latest, t_s)
 
     def _stillness(self, tr, filtered: np.ndarray, mask: np.ndarray) -> bool:
         tol = self.config.still_rms_kpa

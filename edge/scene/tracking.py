@@ -24,6 +24,7 @@ from scipy.optimize import linear_sum_assignment
 
 from edge.scene.config import SceneConfig
 from edge.scene.one_euro import OneEuroFilter
+from edge.scene.people import Body
 
 
 @dataclass
@@ -40,6 +41,10 @@ class Track:
     velocity_m_s: np.ndarray = field(default_factory=lambda: np.zeros(2))
     ref_pressure_kpa: np.ndarray | None = None  # stillness reference
     ref_mask: np.ndarray | None = None
+    extent_m: float = 0.0  # farthest contact from the centre, slowly forgotten (edge.scene.people)
+    weight_n: float | None = None  # the body's own weight (contacts' force, slow average), once confirmed
+    far_frames: int = 0  # consecutive frames with parts farther apart than split_distance_m
+    heavy_frames: int = 0  # consecutive frames carrying more than its weight with a part that carries the excess
 
     def predict(self, t_s: float, horizon_s: float = 0.25) -> np.ndarray:
         """Constant-velocity prediction, extrapolated at most ``horizon_s`` (a coasting track's velocity goes stale)."""
@@ -65,6 +70,28 @@ class PeopleTracker:
 
     def predictions(self, t_s: float) -> dict[int, np.ndarray]:
         return {k: tr.predict(t_s) for k, tr in self.tracks.items()}
+
+    def bodies(self, t_s: float) -> dict[int, Body]:
+        """Every track as grouping sees it: predicted centre, reach (reach_m beyond its extent), weight, split evidence."""
+        cfg = self.config
+        return {k: Body(tr.predict(t_s), cfg.reach_m + tr.extent_m, tr.weight_n, tr.far_frames, tr.heavy_frames)
+                for k, tr in self.tracks.items()}
+
+    def observe_body(self, tr: Track, extent_m: float, contact_force_n: float, far: bool, heavy: bool, dt_s: float) -> None:
+        """After a frame: the track's extent (max of now and the decayed old one), its weight (slow average of
+        its contacts' force while no split is pending) and its split evidence counters."""
+        cfg = self.config
+        decay = float(np.exp(-max(dt_s, 0.0) / cfg.extent_memory_s))
+        tr.extent_m = max(float(extent_m), tr.extent_m * decay)
+        tr.far_frames = tr.far_frames + 1 if far else 0
+        tr.heavy_frames = tr.heavy_frames + 1 if heavy else 0
+        if tr.track_id is None or heavy:
+            return
+        if tr.weight_n is None:
+            tr.weight_n = float(contact_force_n)
+        else:
+            a = min(1.0, max(dt_s, 0.0) / cfg.weight_tau_s)
+            tr.weight_n += a * (float(contact_force_n) - tr.weight_n)
 
     def step(self, observations: list[Observation], keys: list[int], t_s: float) -> list[Track | None]:
         """Assign observations to tracks and update them; returns the track of each observation (None: ignored).

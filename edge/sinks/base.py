@@ -23,6 +23,7 @@ from collections import deque
 from typing import Any, Mapping, Sequence
 
 from edge.record import RecordError, check_record, check_telemetry, dumps
+from edge.topics import EVENTS_SCHEMA
 from edge.urls import Option, parse_bool, parse_url
 
 __all__ = ["Sink", "SinkError", "Counters", "Option", "parse_bool", "parse_sink_url"]
@@ -105,7 +106,7 @@ class Sink(ABC):
         """One ``cavatar.events/1`` payload (a fall or person-down event raised or cleared); checked like info."""
         try:
             check_telemetry(dict(payload), "event")
-            if payload.get("schema") != "cavatar.events/1" or payload.get("device") != self.device:
+            if payload.get("schema") != EVENTS_SCHEMA or payload.get("device") != self.device:
                 raise RecordError(f"not a cavatar.events/1 payload of device {self.device!r}")
             line = dumps(dict(payload))
         except RecordError:

@@ -22,24 +22,34 @@ part-way is cut back to the last whole line; and a file opened for appending tha
 in a torn line (the machine died mid-write) has that torn tail cut off first, logged and
 counted in ``stats()['repaired']``.
 
+Only its own files: an existing file is appended to only if it is a regular file (not
+followed through a symbolic link) whose lines are this device's ``cavatar.bodies/1``
+records (its first whole line is checked, and a torn tail must be the start of one);
+anything else is refused (SinkError), never truncated or changed.
+
 Rotation: when the next write would pass ``rotate_mb`` or the file is older than
 ``rotate_s`` (since this process opened it), the file is fsynced, renamed to
-``<stem>-<UTC time to the µs>-<nn>.jsonl`` and a new one started; ``keep`` rotated files are kept.
+``<stem>-<UTC time to the µs>-<nn>.jsonl`` and a new one started; ``keep`` rotated files are
+kept. Pruning deletes only regular files named exactly so, never another ``<stem>-*`` file.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import os
+import re
+import stat
 import sys
 import threading
 import time
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Mapping
+from glob import escape as glob_escape
 from urllib.parse import unquote
 
-from edge.record import dumps
+from edge.record import RecordError, check_record, dumps
 from edge.sinks.base import Option, Sink, SinkError, parse_sink_url
 
 log = logging.getLogger(__name__)
@@ -64,6 +74,8 @@ OPTIONS = {
     "flush_ms": Option(_at_least_zero(float), 0.0, "0: write every record at once; N: write gathered records once the oldest waited N ms"),
 }
 STDOUT_OPTIONS = {"flush_ms": OPTIONS["flush_ms"]}
+HEAD = b'{"schema":"cavatar.bodies/1"'  # how every line this sink writes begins (edge.record.dumps)
+SCAN_BYTES = 1 << 20  # at most this much is read to check a file's first line or its torn tail
 
 
 def open_sink(url: str, device: str, **kwargs: Any) -> "JsonlSink":
@@ -88,7 +100,9 @@ class JsonlSink(Sink):
         self.rotate_s = rotate_s
         self.keep = keep
         self.flush_ms = flush_ms
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()     # the gathered lines; held only briefly
+        self._io_lock = threading.Lock()  # the file; held across writes
+        self._writing = 0
         self._buf: list[bytes] = []
         self._t_calls: list[float] = []
         self._fd: int | None = None
@@ -110,25 +124,60 @@ class JsonlSink(Sink):
 
     def _open(self) -> None:
         assert self.path is not None
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
-        size = os.fstat(fd).st_size
-        if size:
-            size = self._repair(fd, size)
+        try:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644)
+        except OSError as exc:
+            if self.path.is_symlink():
+                raise SinkError(f"jsonl:// {str(self.path)!r} is a symbolic link: refused (a link could point at "
+                                "anyone's file); give the real path") from None
+            raise
+        try:
+            size = os.fstat(fd).st_size
+            why = self._not_ours(fd, size)
+            if why:
+                raise SinkError(f"jsonl:// {str(self.path)!r} {why}: this sink did not write it, so it neither appends "
+                                "to it nor changes it. Give another path, or move that file away.")
+            if size:
+                size = self._repair(fd, size)
+        except BaseException:
+            os.close(fd)
+            raise
+        os.set_blocking(fd, True)
         self._fd, self._size, self._opened = fd, size, time.monotonic()
 
+    def _not_ours(self, fd: int, size: int) -> str:
+        """Why the open file is not one this sink wrote for this device ("" when it is, or is empty)."""
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return "is not a regular file (for standard output use jsonl:-)"
+        if size == 0:
+            return ""
+        head = os.pread(fd, min(size, SCAN_BYTES), 0)
+        first, nl, _ = head.partition(b"\n")
+        if not nl:  # one torn line and nothing else: it must be the start of a record
+            return "" if first[:len(HEAD)] == HEAD[:len(first)] and size <= SCAN_BYTES else \
+                "does not hold cavatar.bodies/1 records"
+        try:
+            record = json.loads(first)
+            check_record(record)
+        except (ValueError, RecordError):
+            return "does not hold cavatar.bodies/1 records"
+        if record.get("device") != self.device:
+            return f"holds the records of device {record.get('device')!r}, not {self.device!r}"
+        return ""
+
     def _repair(self, fd: int, size: int) -> int:
-        """Cut a torn last line (no newline at the end); return the new size."""
+        """Cut a torn last line (no newline at the end; the start of a record); return the new size."""
         if os.pread(fd, 1, size - 1) == b"\n":
             return size
-        end = size
-        while end > 0:
-            start = max(0, end - 65536)
-            chunk = os.pread(fd, end - start, start)
-            nl = chunk.rfind(b"\n")
-            if nl >= 0:
-                end = start + nl + 1
-                break
-            end = start
+        start = max(0, size - SCAN_BYTES)
+        chunk = os.pread(fd, size - start, start)
+        nl = chunk.rfind(b"\n")
+        end = start + nl + 1 if nl >= 0 else (0 if start == 0 else -1)
+        tail = chunk[nl + 1:]
+        if end < 0 or tail[:len(HEAD)] != HEAD[:len(tail)]:
+            raise SinkError(f"jsonl:// {str(self.path)!r} ends in {size - max(end, 0)} bytes that are not the start "
+                            "of a record: not a torn line of this sink's, so the file is left as it is. Give another "
+                            "path, or move that file away.")
         os.ftruncate(fd, end)
         log.warning("jsonl:// %s ended in a torn line (%d bytes): cut off", self.path, size - end)
         self.counters.add("repaired")
@@ -154,10 +203,12 @@ class JsonlSink(Sink):
                 old.unlink(missing_ok=True)
 
     def rotated_files(self) -> list[Path]:
-        """Rotated files, oldest first."""
+        """Rotated files, oldest first: regular files named exactly as :meth:`_rotate` names them."""
         if self.path is None:
             return []
-        return sorted(self.path.parent.glob(f"{self.path.stem}-*{self.path.suffix}"))
+        name = re.compile(re.escape(self.path.stem) + r"-\d{8}T\d{6}\.\d{6}Z-\d{2,}" + re.escape(self.path.suffix) + "$")
+        return sorted(p for p in self.path.parent.glob(f"{glob_escape(self.path.stem)}-*")
+                      if name.match(p.name) and not p.is_symlink() and p.is_file())
 
     # -- writing --------------------------------------------------------------------------
 
@@ -165,36 +216,60 @@ class JsonlSink(Sink):
         with self._lock:
             self._buf.append(line.encode() + b"\n")
             self._t_calls.append(t_call)
-            if self.flush_ms <= 0 or (time.monotonic() - self._t_calls[0]) * 1000.0 >= self.flush_ms:
-                self._flush_locked()
+            due = self.flush_ms <= 0 or (time.monotonic() - self._t_calls[0]) * 1000.0 >= self.flush_ms
+        if due:
+            self._flush()
 
     def flush(self, timeout_s: float = 5.0) -> bool:
         """Write whatever is gathered now."""
-        with self._lock:
-            self._flush_locked()
+        self._flush()
         return True
 
-    def _flush_locked(self) -> None:
-        if not self._buf:
-            return
-        data = b"".join(self._buf)
-        n, t_calls = len(self._buf), self._t_calls
-        self._buf, self._t_calls = [], []
-        try:
-            if self.path is None:
-                sys.stdout.write(data.decode())
-                sys.stdout.flush()
-            else:
-                self._maybe_rotate(len(data))
-                self._write_whole(data)
-        except (OSError, ValueError) as exc:  # disk full, stdout closed: count, log, keep going
-            self.counters.add("errors")
-            self.counters.add("dropped", n)
-            log.error("jsonl:// %s: %d records not written: %s", self.describe(), n, exc)
-            return
+    def _flush(self) -> None:
+        """Take the gathered lines (``_lock``, never held across I/O, so ``stats()`` never waits on a
+        blocked write) and write them (``_io_lock``)."""
+        with self._io_lock:
+            with self._lock:
+                if not self._buf:
+                    return
+                data = b"".join(self._buf)
+                n, t_calls = len(self._buf), self._t_calls
+                self._buf, self._t_calls = [], []
+                self._writing = n
+            try:
+                if self.path is None:
+                    self._write_stdout(data)
+                else:
+                    self._maybe_rotate(len(data))
+                    self._write_whole(data)
+            except (OSError, ValueError) as exc:  # disk full, stdout closed: count, log, keep going
+                self.counters.add("errors")
+                self.counters.add("dropped", n)
+                log.error("jsonl:// %s: %d records not written: %s", self.describe(), n, exc)
+                return
+            finally:
+                with self._lock:
+                    self._writing = 0
         now = time.monotonic()
         for t in t_calls:
             self.counters.delivered(now - t)
+
+    @staticmethod
+    def _write_stdout(data: bytes) -> None:
+        """Straight to file descriptor 1 where there is one: a write blocked on a full pipe then holds no
+        Python lock (``sys.stdout``'s would stop the interpreter from exiting)."""
+        try:
+            fd = sys.stdout.fileno()
+        except (AttributeError, OSError, ValueError):
+            fd = None
+        if fd is None:
+            sys.stdout.write(data.decode())
+            sys.stdout.flush()
+            return
+        sys.stdout.flush()
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
 
     def _maybe_rotate(self, incoming: int) -> None:
         too_big = self.rotate_bytes and self._size and self._size + incoming > self.rotate_bytes
@@ -258,13 +333,13 @@ class JsonlSink(Sink):
 
     def _gauges(self) -> dict[str, Any]:
         with self._lock:
-            return {"queued": len(self._buf), "rotations": self.rotations}
+            return {"queued": len(self._buf) + self._writing, "rotations": self.rotations}
 
     def close(self) -> None:
         if self.closed:
             return
-        with self._lock:
-            self._flush_locked()
+        self._flush()
+        with self._io_lock:
             self.closed = True
             if self._fd is not None:
                 try:

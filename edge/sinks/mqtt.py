@@ -8,8 +8,12 @@ the URL: it is read from the environment variable named by ``password_env``
 
 Behaviour
 - Connects in the background and reconnects forever (back-off up to ``retry_s``); a broker
-  that is down at start is not an error. On every connect: status (retained), info
-  (retained), presence (retained), Home Assistant discovery (retained, if ``ha=1``).
+  that is down at start is not an error, but it is loud: the first failed attempt of every
+  outage is a WARNING with the reason (name does not resolve, connection refused, no answer),
+  and the first connection and every recovery are a WARNING too ("connected to …"), so the
+  journal confirms both. ``cavatar run`` exits 1 when a sink never connected during the run
+  (``--require-sinks`` refuses to start without the broker). On every connect: status,
+  info, board, presence (all retained), Home Assistant discovery (retained, if ``ha=1``).
 - Last will: ``status`` = "offline" (QoS 1, retained), sent by the broker when the process
   dies or hangs (after about 1.5 × ``keepalive``). A clean ``close()`` publishes "offline"
   itself first, because a graceful disconnect does not trigger the will.
@@ -30,6 +34,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import socket
 import ssl
 import threading
 import time
@@ -156,6 +161,27 @@ def open_sink(url: str, device: str, **kwargs: Any) -> "MqttSink":
     return MqttSink(parse(url), device, **kwargs)
 
 
+def unreachable_reason(host: str, port: int, timeout_s: float = 1.0) -> str:
+    """Why a broker cannot be reached, in words (paho's on_connect_fail does not say): the name does not resolve,
+    or the TCP connection's error (refused, timed out, no route)."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        return f"the host name {host!r} does not resolve ({exc.strerror or exc})"
+    except OSError as exc:
+        return f"the host name {host!r} cannot be looked up ({exc})"
+    family, kind, proto, _, address = infos[0]
+    try:
+        with socket.socket(family, kind, proto) as s:
+            s.settimeout(timeout_s)
+            s.connect(address)
+    except socket.timeout:
+        return f"no answer from {address[0]}:{port} within {timeout_s:g} s (firewall, wrong host, broker hung)"
+    except OSError as exc:
+        return f"{exc.strerror or exc} at {address[0]}:{port} (is the broker running, on this port?)"
+    return "the TCP connection opens but the MQTT connection failed (TLS or protocol mismatch?)"
+
+
 class _Pending:
     """A message handed to paho and not yet delivered."""
 
@@ -187,8 +213,12 @@ class MqttSink(Sink):
         self._info: dict | None = None
         self._presence: dict | None = None
         self._presence_key: tuple | None = None
+        self._board: bool | None = None  # info's board_connected: frames arriving from the board
+        self._activities: list[str] | None = None  # info's activities: the model's labels (the HA activity enum)
         self._last_refusal = ""
         self.connects = 0
+        self._down_since: float | None = time.monotonic()  # not connected since (None: connected)
+        self._failures_said = False  # the current outage's first failure is logged, once
         self.counters.add("spooled_total", 0)
         self.counters.add("connect_failures", 0)
 
@@ -196,7 +226,7 @@ class MqttSink(Sink):
         self._spooling = False
         if config.spool:
             try:
-                self._spool = Spool(config.spool, int(config.spool_mb * 1e6))
+                self._spool = Spool(config.spool, int(config.spool_mb * 1e6), device=device)
             except OSError as exc:
                 raise SinkError(f"mqtt:// spool: {exc}") from None
             self._spool.seal()
@@ -248,6 +278,8 @@ class MqttSink(Sink):
         return self.config.describe()
 
     def wait_connected(self, timeout_s: float) -> bool:
+        """True once connected and the broker has acknowledged this connection's retained status (so a subscriber
+        that comes after finds it retained)."""
         return self._connected_evt.wait(timeout_s)
 
     @property
@@ -263,6 +295,16 @@ class MqttSink(Sink):
         self._info = info_payload(self.device, info, time.time())
         if self._connected:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
+        acts = info.get("activities")
+        if isinstance(acts, list) and acts != self._activities:  # the activity sensor's options follow the model
+            self._activities = [str(a) for a in acts]
+            if self._connected and self.config.ha:
+                self._send_discovery()
+        board = info.get("board_connected")
+        if isinstance(board, bool) and board != self._board:  # the board's availability, retained, on change
+            self._board = board
+            if self._connected:
+                self._send(self.topics.board, ONLINE if board else OFFLINE, 1, True, "board")
 
     def publish_presence(self, count: int, activities: Sequence[str]) -> None:
         """Retained presence state, published only when the count or the activities change."""
@@ -299,6 +341,8 @@ class MqttSink(Sink):
             self._drainer.join(timeout=self.config.close_s + 1)
         deadline = time.monotonic() + max(0.0, self.config.close_s)
         if self._connected:
+            if self._board is not None:  # a stopped runtime reads no frames
+                self._send(self.topics.board, OFFLINE, 1, True, "board")
             self._send(self.topics.status, OFFLINE, 1, True, "status")
             with self._acks:
                 while self._pending and self._connected and time.monotonic() < deadline:
@@ -330,6 +374,7 @@ class MqttSink(Sink):
             out["spooled"] = len(self._spool)
             out["dropped"] = self.counters.values["dropped"] + self._spool.dropped
             out["spool_bytes"] = self._spool.size_bytes()
+            out["spool_refused"] = self._spool.refused + self._spool.foreign  # lines/files there not ours: never sent
         return out
 
     # -- publishing -----------------------------------------------------------------------
@@ -414,6 +459,8 @@ class MqttSink(Sink):
         elif entry.kind == "spool":
             self.counters.delivered(None)
             entry.seg.acked.add(entry.idx)
+        elif entry.kind == "announce" and self._connected:
+            self._connected_evt.set()
         self._acks.notify_all()
 
     # -- spool drain ----------------------------------------------------------------------
@@ -496,32 +543,55 @@ class MqttSink(Sink):
             return
         self._last_refusal = ""
         self.connects += 1
-        log.info("mqtt:// connected to %s", self.config.describe())
-        self._send(self.topics.status, ONLINE if self._online else OFFLINE, 1, True, "status")
+        down = time.monotonic() - self._down_since if self._down_since is not None else 0.0
+        failed = self.counters.values.get("connect_failures", 0)
+        # WARNING, the journal's level: the first connection and every recovery are confirmed there, once each
+        log.warning("mqtt:// connected to %s%s", self.config.describe(),
+                    "" if self.connects == 1 and not self._failures_said else
+                    f" again after {down:.1f} s ({failed} failed attempts so far)")
+        self._down_since, self._failures_said = None, False
+        # Connected before the retained states are sent: a state another thread changes meanwhile is then either
+        # read below or sent by that thread itself (it updates the state first, then looks at _connected).
+        self._connected = True
+        self._send(self.topics.status, ONLINE if self._online else OFFLINE, 1, True, "announce")  # PUBACK → wait_connected
         if self._info is not None:
             self._send(self.topics.info, dumps(self._info), 1, True, "info")
+        if self._board is not None:
+            self._send(self.topics.board, ONLINE if self._board else OFFLINE, 1, True, "board")
         if self.config.ha:
             self._send_discovery()
             client.subscribe(self.topics.ha_status, qos=1)
         if self._presence is not None:
             self._send(self.topics.presence, dumps(self._presence), 1, True, "presence")
-        self._connected = True
-        self._connected_evt.set()
         self._wake.set()
 
     def _send_discovery(self) -> None:
         from edge.runtime.events import ha_event_discovery
 
-        configs = self.topics.ha_discovery(sw_version=__version__)
-        configs += ha_event_discovery(self.topics, configs[0][1]["device"])
+        configs = self.topics.ha_discovery(sw_version=__version__, activities=self._activities)
+        configs += ha_event_discovery(self.topics, configs[0][1]["device"], configs[0][1].get("origin"))
         for topic, payload in configs:
             self._send(topic, dumps(payload), 1, True, "discovery")
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
         self.counters.add("connect_failures")
+        if not self._failures_said and not self.closed:  # once per outage, with the reason; recovery says so too
+            self._failures_said = True
+            log.warning("mqtt:// cannot connect to %s:%d: %s; %s; retrying every %g s at most", self.config.host,
+                        self.config.port, unreachable_reason(self.config.host, self.config.port), self._meanwhile(),
+                        self.config.retry_s)
+
+    def _meanwhile(self) -> str:
+        if self._spool is not None:
+            return "records wait in the spool until it connects"
+        if self.config.qos == 0:
+            return "records are dropped (qos=0) until it connects"
+        return f"records wait in memory (up to max_queued={self.config.max_queued}) until it connects"
 
     def _on_disconnect(self, client: Any, userdata: Any, flags: Any, reason_code: Any, properties: Any) -> None:
         self._connected = False
+        if self._down_since is None:
+            self._down_since = time.monotonic()
         self._connected_evt.clear()
         with self._acks:
             lost = [mid for mid, p in self._pending.items() if p.qos == 0]

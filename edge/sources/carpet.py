@@ -8,6 +8,11 @@ paces frames by their device timestamps when ``speed`` > 0.
 
 On a live link that is lost (unplug, reset), the reader closes it and reopens it with
 back-off (0.1 s doubling to 0.5 s), repeats the handshake and resumes — no restart.
+
+The first INFO pins the board's identity (device id, grid, ADC bits, sign: what a
+calibration is bound to). An INFO with another identity, mid-stream or after a replug,
+holds every frame back (``board_mismatch`` in :meth:`stats`, packets counted) until an INFO of
+the pinned board comes again: bodies are never computed with another carpet's calibration.
 """
 
 from __future__ import annotations
@@ -27,6 +32,8 @@ from firmware_protocol import codec
 log = logging.getLogger(__name__)
 
 _END = object()  # queue sentinel: the source has ended
+
+IDENTITY = ("device_id", "rows", "cols", "adc_bits", "sign")  # INFO fields a calibration is bound to
 
 
 class CommandRefused(SourceError):
@@ -58,6 +65,7 @@ class CarpetSource:
         self.decoder = codec.StreamDecoder("device_to_host")
         self.counters: Counter = Counter()
         self.info: Any = None
+        self.board_mismatch: str | None = None  # why frames are held back: another board answered
         self.last_status: Any = None
         self.assembler: FrameAssembler | None = None
         self._queue: queue.Queue = queue.Queue(maxsize=max(1, queue_frames))
@@ -146,6 +154,7 @@ class CarpetSource:
         out = {"decoder": self.decoder.stats.as_dict(), "source": dict(self.counters)}
         if self.assembler is not None:
             out["frames"] = dict(self.assembler.counters)
+        out["board_mismatch"] = self.board_mismatch
         if self.last_status is not None:
             out["board_status"] = {f.name: getattr(self.last_status, f.name) for f in self.last_status.DEF.fields}
         return out
@@ -186,6 +195,11 @@ class CarpetSource:
             for pkt in self.decoder.feed(data):
                 if info is None and isinstance(pkt, (codec.Info, codec.ForeignInfo)):
                     codec.check_compatible(pkt)
+                    problems = codec.info_range_problems(pkt)
+                    if problems:
+                        self.counters["info_out_of_range"] += 1
+                        raise SourceError(f"{self.link.describe()}: the board's INFO is out of range: "
+                                          + ", ".join(problems) + "; check the firmware")
                     info = pkt
                 elif info is not None:
                     self._pending.append(pkt)
@@ -208,15 +222,29 @@ class CarpetSource:
         return f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s (wrong baud rate or not a carpet board?)"
 
     def _adopt_info(self, info: Any) -> None:
-        if self.info is not None and (info.rows, info.cols) != (self.info.rows, self.info.cols):
-            raise SourceError(f"the board now reports {info.rows}×{info.cols}, it was {self.info.rows}×{self.info.cols}; restart to adopt it")
-        first = self.info is None
-        self.info = info
-        if first:
+        """Adopt the first INFO; pin its board identity. A later INFO (mid-stream or after a replug) of
+        another board stops the frames until the pinned board is back (``board_mismatch``)."""
+        if self.info is None:
+            self.info = info
             wiring = WiringMap.from_config(self.wiring_config, info.rows, info.cols)
             self.assembler = FrameAssembler(info, wiring, missing_rows=self.missing_rows)
-        else:
-            self.assembler.reset()
+            return
+        diffs = [f"{key} {theirs!r} (was {ours!r})" for key, ours, theirs in
+                 ((key, getattr(self.info, key), getattr(info, key)) for key in IDENTITY) if ours != theirs]
+        self.assembler.reset()
+        if diffs:
+            self.counters["board_mismatch"] += 1
+            message = ("another board answered: " + ", ".join(diffs) + ". Its frames are not used (the calibration "
+                       "and model belong to the first board); plug the original board back, or calibrate this one "
+                       "and restart with its calibration.")
+            if message != self.board_mismatch:
+                log.error("%s: %s", self.link.describe(), message)
+            self.board_mismatch = message
+            return
+        if self.board_mismatch is not None:
+            log.warning("%s: the original board is back; frames resume", self.link.describe())
+        self.board_mismatch = None
+        self.info = info
 
     def _run(self) -> None:
         try:
@@ -254,6 +282,11 @@ class CarpetSource:
         """Handle one packet; True when it completed a frame."""
         if isinstance(pkt, (codec.Info, codec.ForeignInfo)):
             codec.check_compatible(pkt)
+            problems = codec.info_range_problems(pkt)
+            if problems:  # counted and ignored; never sizes a buffer
+                self.counters["info_out_of_range"] += 1
+                log.warning("%s: an INFO out of range ignored: %s", self.link.describe(), ", ".join(problems))
+                return False
             self._adopt_info(pkt)
             return False
         if isinstance(pkt, codec.Status):
@@ -261,6 +294,9 @@ class CarpetSource:
             return False
         if isinstance(pkt, (codec.Ack, codec.Nak)):
             self._replies.put(pkt)
+            return False
+        if self.board_mismatch is not None:  # another board's packets: never turned into frames
+            self.counters["packets_board_mismatch"] += 1
             return False
         frames = self.assembler.push(pkt)
         for frame in frames:

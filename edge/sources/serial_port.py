@@ -2,10 +2,16 @@
 
 Use a stable path where you can (``/dev/serial/by-id/...`` or a udev symlink): the
 kernel's ``/dev/ttyACM0`` may change name after a replug.
+
+The port is taken exclusively (pyserial's ``exclusive=True``, an ``flock``): two readers of one
+board each get part of the bytes, so both see bad CRCs and torn frames, and a calibration run
+beside the service would calibrate on garbage. A second cavatar process on the same port is
+refused with one line that names the holder when /proc shows it (``port_holders``).
 """
 
 from __future__ import annotations
 
+import errno
 import os
 
 from edge.sources.base import Link, LinkLost, Option, SourceError, parse_url
@@ -26,6 +32,55 @@ def available_ports() -> list[str]:
     return ports + sorted(p.device for p in list_ports.comports())
 
 
+def port_holders(port: str) -> list[tuple[int, str]]:
+    """Processes that have ``port`` open, as (pid, command line on one line), from /proc (Linux). Processes of other
+    users are invisible without root; an empty list then means "someone we cannot see"."""
+    try:
+        target = os.path.realpath(port)
+    except OSError:
+        return []
+    found = []
+    try:
+        pids = [d for d in os.listdir("/proc") if d.isdigit()]
+    except OSError:
+        return []
+    for pid in pids:
+        fd_dir = f"/proc/{pid}/fd"
+        try:
+            fds = os.listdir(fd_dir)
+        except OSError:  # gone, or another user's
+            continue
+        for fd in fds:
+            try:
+                if os.readlink(f"{fd_dir}/{fd}") == target:
+                    break
+            except OSError:
+                continue
+        else:
+            continue
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                cmd = " ".join(f.read().replace(b"\0", b" ").decode(errors="replace").split())
+        except OSError:
+            cmd = ""
+        found.append((int(pid), cmd or "?"))
+    return found
+
+
+def busy_message(port: str) -> str:
+    """One line: the port is taken, by whom if visible, what to do."""
+    holders = port_holders(port)
+    others = [(pid, cmd) for pid, cmd in holders if pid != os.getpid()]
+    if others:
+        who = "held by " + ", ".join(f"pid {pid} ({cmd[:100]})" for pid, cmd in others)
+    elif holders:
+        who = f"held by this process, pid {os.getpid()}: another source on the same port"
+    else:
+        who = f"held by a process this user cannot see (`sudo fuser -v {port}` names it)"
+    return (f"serial port {port} is in use by another program ({who}); two readers of one board corrupt each other's "
+            "frames. Stop the other program first (the service: `sudo systemctl stop cavatar`).")
+
+
 class SerialLink(Link):
     def __init__(self, port: str, baud: int) -> None:
         self.port, self.baud = port, baud
@@ -39,8 +94,12 @@ class SerialLink(Link):
         import serial
 
         try:
-            self._ser = serial.Serial(self.port, self.baud, timeout=0.05, write_timeout=1.0)
+            self._ser = serial.Serial(self.port, self.baud, timeout=0.05, write_timeout=1.0, exclusive=True)
         except (serial.SerialException, OSError) as exc:
+            if getattr(exc, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK) and "lock" in str(exc):
+                if not self._opened_once:
+                    raise SourceError(busy_message(self.port)) from None
+                raise LinkLost(f"{self.port} is taken by another program") from None
             missing = not os.path.exists(self.port)
             if missing and not self._opened_once:
                 ports = ", ".join(available_ports()) or "none"

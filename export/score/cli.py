@@ -128,6 +128,14 @@ def write_outputs(result: dict[str, Any], paths: dict[str, Path], say=print) -> 
         say(f"score: no PNG ({exc})")
 
 
+def _write(result: dict[str, Any], paths: dict[str, Path]) -> None:
+    try:
+        write_outputs(result, paths)
+    except OSError as exc:
+        raise _error(f"cannot write {exc.filename or 'the results'}: {exc.strerror}; give --out (or --json/--md/--png) "
+                     "in a writable place") from None
+
+
 def _relative(target: Path, start: Path) -> str:
     import os
 
@@ -157,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
         if not isinstance(result, dict) or result.get("schema") != "cavatar.score/1":
             raise _error(f"--render {args.render}: not a cavatar.score/1 result (written by `cavatar score`)")
         del paths["json"]
-        write_outputs(result, paths)
+        _write(result, paths)
         print(f"score: wrote {paths['md']} and {paths['png']}")
         return 0
     if not args.match_m > 0:
@@ -166,6 +174,11 @@ def run(args: argparse.Namespace) -> int:
         raise _error(f"--calibration {args.calibration}: no such file; give installer, truth or a calibration file")
     set_name, scenes = _scenes(args)
     config = _config(args)
+    for folder in (Path(args.work), *(p.parent for p in paths.values())):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise _error(f"cannot create {folder}: {exc.strerror}; give --work/--out in a writable place") from None
     from edge.runtime.pipeline import SetupError
     from export.score.session import score_scenes
 
@@ -175,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
                               config=config, set_name=set_name, command=command)
     except SetupError as exc:
         raise _error(str(exc)) from None
-    write_outputs(result, paths)
+    _write(result, paths)
     o = result["overall"]
     if o is None:
         print(f"score: no scene could be scored; see {paths['json']}", file=sys.stderr)

@@ -33,6 +33,32 @@ def table(rows: dict[str, dict[str, Any]], columns, first: str) -> list[str]:
     return lines
 
 
+def targets(result: dict[str, Any]) -> list[str]:
+    """Issue 12's targets against the measured numbers: one table row each."""
+    rows = []
+
+    def row(what: str, value: Any, goal: float, higher: bool) -> None:
+        met = "—" if value is None else ("met" if (value >= goal if higher else value <= goal) else "not met")
+        rows.append(f"| {what} | {cell(value)} | {'≥' if higher else '≤'} {goal:g} | {met} |")
+
+    one = result["by_people"].get("1")
+    if one:
+        row("1 person: extra-track frames %", one["extra_frames_pct"], 1, False)
+        alone = {a: r["extra_frames_pct_alone"] for a, r in result["by_activity"].items() if r.get("frames_alone")}
+        if alone:
+            worst = max(alone, key=lambda a: alone[a])
+            row(f"1 person: extra-track frames %, worst activity ({worst})", alone[worst], 1, False)
+    for n in ("2", "3"):
+        r = result["by_people"].get(n)
+        if r:
+            row(f"{n} people: count right %", r["count_right_pct"], 98, True)
+            row(f"{n} people: MOTA %", r["mota_pct"], 95, True)
+            row(f"{n} people: identity switches / 10 person-min", r["idsw_per_10_person_min"], 1, False)
+    if not rows:
+        return []
+    return ["## Issue 12's targets", "", "| target | measured | goal | |", "|---|---|---|---|", *rows, ""]
+
+
 def markdown(result: dict[str, Any], png_name: str = "score.png") -> str:
     """The page: what was run, the headline table, per activity, per scene, the timeline picture."""
     m = result["machine"]
@@ -46,14 +72,16 @@ def markdown(result: dict[str, Any], png_name: str = "score.png") -> str:
              "(scene, subject): each 10-s scene of the virtual carpet puts the people somewhere new. Pose errors over "
              "matched person-frames: MPJPE pelvis-aligned, PA-MPJPE after Procrustes, local MPJPE with the true global "
              "orientation, heading = rotation about the vertical (export/metrics.py). ms/frame: the pipeline's time per "
-             "frame (calibrate → record queued), on a shared machine.", "",
+             "frame (calibrate → record queued) while the virtual carpet makes the next frames in the same process (its "
+             "reader thread holds the GIL for the contact physics), on a shared machine: an upper bound; "
+             "bench/runtime_latency.py times the stages alone.", "",
              f"*{m['cpu_count']} cores, load average {'/'.join(f'{x:g}' for x in m['load_average_1_5_15_min'])}, "
              f"{result['date']}, git {result['git_revision'][:12]}, model {', '.join(result['model']) or '—'}, calibration "
              f"{result['calibration']}: `{result['command']}` ({result['score_s']:.0f} s).*", "",
              "## Overall and per number of people", ""]
     rows = {"all": result["overall"] or {}, **{f"{k} {'person' if k == '1' else 'people'}": v
                                                   for k, v in result["by_people"].items()}}
-    lines += table(rows, COLUMNS, "") + ["", "## Per activity", "",
+    lines += table(rows, COLUMNS, "") + [""] + targets(result) + ["## Per activity", "",
                                          "A frame counts for every activity present in it; *alone* = one-person scenes.", ""]
     lines += table(result["by_activity"], ACTIVITY_COLUMNS, "activity") + ["", "## Scenes", ""]
     lines += ["| scene | source | status | frames | count right % | extra-track % | MOTA % | MPJPE cm | runtime s | note |",

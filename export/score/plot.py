@@ -8,6 +8,12 @@ from typing import Any
 import numpy as np
 
 
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[(start, stop)) of every run of True in a 1-D boolean array."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
 def timeline_png(result: dict[str, Any], out_png: Path) -> Path:
     """One row per scored scene: true count (black) and published count (red) per frame; extra frames shaded."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -26,24 +32,31 @@ def timeline_png(result: dict[str, Any], out_png: Path) -> Path:
         true = np.asarray(result["timeline"][name]["true"])
         pub = np.asarray(result["timeline"][name]["published"])
         t = np.arange(len(true)) / rate
-        ax.fill_between(t, 0, top + 0.6, where=pub > true, step="post", color="tab:red", alpha=0.15, lw=0)
-        ax.fill_between(t, 0, top + 0.6, where=pub < true, step="post", color="tab:blue", alpha=0.15, lw=0)
-        ax.step(t, true, where="post", color="black", lw=2.2, label="true")
-        ax.step(t, pub, where="post", color="tab:red", lw=1.1, label="published")
+        for mask, colour in ((pub > true, "tab:red"), (pub < true, "tab:blue")):
+            for a, b in _runs(mask):  # frame a up to (not including) frame b
+                ax.axvspan(a / rate, b / rate, color=colour, alpha=0.15, lw=0)
+        te = np.append(t, len(t) / rate)  # each frame drawn over its whole interval
+        ax.step(te, np.append(true, true[-1:]), where="post", color="black", lw=2.2, label="true")
+        ax.step(te, np.append(pub, pub[-1:]), where="post", color="tab:red", lw=1.1, label="published")
         chunk = scenes[name]["scene_s"]
         for x in np.arange(chunk, t[-1] if len(t) else 0, chunk):
             ax.axvline(x, color="0.6", lw=0.6, ls=":")
+        for i, acts in enumerate(result["timeline"][name].get("chunk_activities", [])):
+            x = min((i + 0.5) * chunk, (i * chunk + t[-1]) / 2 if len(t) else 0)
+            ax.text(x, top + 0.9, ", ".join(a.replace("_", "-") for a in acts), ha="center", va="top", fontsize=7,
+                    color="0.25")
         s = scenes[name].get("summary") or {}
-        ax.set_ylim(-0.2, top + 0.6)
+        ax.set_ylim(-0.2, top + 1.0)
         ax.set_yticks(range(top + 1))
         ax.set_ylabel(name, rotation=0, ha="right", va="center", fontsize=9)
         ax.text(1.005, 0.5, f"right {s.get('count_right_pct')} %\nextra {s.get('extra_frames_pct')} %",
                 transform=ax.transAxes, fontsize=7.5, va="center")
-    axes[0].legend(loc="upper left", fontsize=8, ncol=2, framealpha=0.8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper right", fontsize=8, ncol=2, frameon=False)
     axes[-1].set_xlabel("time in the scene, s (dotted: a new simulated scene; red shade: more published than true, "
                         "blue: fewer)")
     fig.suptitle(f"People count per frame, true vs published ({result['set']} set; "
                  f"{', '.join(result['model']) or 'model ?'})", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
     fig.savefig(out_png)
     return out_png

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import platform
 import time
+from collections import Counter
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -31,6 +32,23 @@ def machine() -> dict[str, Any]:
             "load_average_1_5_15_min": [round(x, 2) for x in os.getloadavg()]}
 
 
+def chunk_activities(run) -> list[list[str]]:
+    """Per simulated scene (chunk) of ``run``, each person's activity: the most frequent one of its
+    frames other than the "standing" a scene starts from (standing only when it is all there is)."""
+    out = []
+    for start in range(0, len(run.truth), run.chunk_frames):
+        per_subject: dict[int, Counter] = {}
+        for truth in run.truth[start:start + run.chunk_frames]:
+            for t in truth:
+                per_subject.setdefault(t["subject_id"], Counter())[t["activity"]] += 1
+        labels = []
+        for counts in per_subject.values():
+            moving = Counter({a: n for a, n in counts.items() if a != "standing"})
+            labels.append((moving or counts).most_common(1)[0][0])
+        out.append(sorted(labels))
+    return out
+
+
 def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, calibration: str = "installer",
                  config: Any = None, set_name: str = "custom", command: str = "",
                  say: Callable[[str], None] = print) -> dict[str, Any]:
@@ -38,6 +56,7 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
     from edge.body import BodyModel
     from edge.provenance import git_revision
 
+    revision = git_revision()  # of the code that runs, before anything is committed meanwhile
     body = BodyModel.load("lite")  # the body the simulator poses and the shipped bundle is trained on
     judged, entries, timeline, models = [], [], {}, set()
     t_all = time.monotonic()
@@ -55,7 +74,8 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
             entry["activities"] = sorted({a for acts in frames["activities"] for a in acts})
             entry["kinds"] = {k: frames["kind"].count(k) for k in sorted(set(frames["kind"]))}
             entry["summary"] = summarise([(scene, frames, persons)], RATE_HZ)["overall"]
-            timeline[scene.name] = {"true": frames["true"].tolist(), "published": frames["published"].tolist()}
+            timeline[scene.name] = {"true": frames["true"].tolist(), "published": frames["published"].tolist(),
+                                    "chunk_activities": chunk_activities(run)}
             s = entry["summary"]
             say(f"score: {scene.name} {run.status}: count right {s['count_right_pct']} %, extra-track frames "
                 f"{s['extra_frames_pct']} %, MOTA {s['mota_pct']} %, MPJPE {s['mpjpe_cm']} cm ({run.runtime_s:.0f} s)")
@@ -63,7 +83,7 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
             say(f"score: {scene.name} {run.status}: {run.reason}")
         entries.append(entry)
     summary = summarise(judged, RATE_HZ)
-    return {"schema": SCHEMA, "set": set_name, "command": command, "machine": machine(), "git_revision": git_revision(),
+    return {"schema": SCHEMA, "set": set_name, "command": command, "machine": machine(), "git_revision": revision,
             "date": datetime.now(timezone.utc).isoformat(timespec="seconds"), "model": sorted(models),
             "match_threshold_m": threshold_m, "calibration": calibration, "rate_hz": RATE_HZ,
             "score_s": round(time.monotonic() - t_all, 1), "scenes": entries, **summary, "timeline": timeline}

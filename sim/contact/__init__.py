@@ -5,11 +5,11 @@ Example::
     from edge.body import BodyModel
     from edge.body.poses import pose_aa
     from edge.body.render import grounded
-    from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
+    from sim.contact import ContactModel, regional_tissue, subject_mass_kg
 
     body = BodyModel.load("lite")
     mass = subject_mass_kg(body, betas)                 # once per subject (zero pose)
-    tissue = tissue_stiffness(body)                     # once per body model, (V,) kPa/mm
+    tissue = regional_tissue(body)                      # once per body model, (V,) kPa/mm (by region)
     carpet = ContactModel(96, 96, pitch_m=0.01905)      # 4.76 mm cells, rug σ 5 mm
     verts = body.forward(pose, betas, transl, vertices=True)["vertices"][0]
     res = carpet.pressure_kpa(verts, body.faces, mass, acc_z_m_s2=0.0, static=True,
@@ -45,7 +45,10 @@ Method (details, numbers and limitations in docs/sim-contact.md):
 
 Mass comes from the mesh volume (divergence theorem) of the subject's zero pose at
 1010 kg/m³ (``subject_mass_kg``, ``body_mass_kg``, ``mesh_report``); the COM from the
-posed mesh's volume centroid unless given.
+posed mesh's volume centroid unless given. Whole tracks (``track.track_dynamics`` /
+``track_contacts``, what the dataset generator uses) give it the COM of the segment mass
+model (``segments.SegmentMassModel``, de Leva), which does not change with pose, and a
+smoothed acceleration; ``tissue.regional_tissue`` sets stiffness by region.
 """
 
 from sim.contact.mesh import (
@@ -61,9 +64,10 @@ from sim.contact.mesh import (
 )
 from sim.contact.model import G_M_S2, ContactModel, ContactResult, SceneResult, sampling_kernel
 from sim.contact.raster import LowestSurface, lowest_surface
+from sim.contact.tissue import regional_tissue
 
 __all__ = [
     "ContactModel", "ContactResult", "SceneResult", "G_M_S2", "DENSITY_KG_M3", "TISSUE_KPA_PER_MM", "MeshReport",
-    "body_mass_kg", "mesh_centroid_m", "mesh_report", "mesh_volume_m3", "subject_mass_kg", "tissue_stiffness",
+    "body_mass_kg", "mesh_centroid_m", "mesh_report", "mesh_volume_m3", "subject_mass_kg", "tissue_stiffness", "regional_tissue",
     "lowest_surface", "LowestSurface", "sampling_kernel",
 ]

@@ -109,7 +109,7 @@ class ContactModel:
         max_band_mm: float = 150.0,
         contact_kpa: float = 0.5,
         max_gap_mm: float = 30.0,
-        max_slope: float = 0.15,
+        max_slope: float = 0.25,
         g_m_s2: float = G_M_S2,
         default_tissue_kpa_per_mm: float = 2.0,
     ):
@@ -188,7 +188,9 @@ class ContactModel:
 
         z_max = zmin + self.band_m
         for attempt in range(6):
-            surf = lowest_surface(v, faces, k_vertex, z_max, self.cell_m, faces_t=self._faces_t(faces))
+            # compliance (1/k) is interpolated across a triangle: tissue in series, so a soft vertex
+            # (the foot's arch) stays soft between stiff neighbours (heel, metatarsal heads)
+            surf = lowest_surface(v, faces, 1.0 / k_vertex, z_max, self.cell_m, faces_t=self._faces_t(faces))
             if surf.empty:
                 return self._empty(com, mass_kg, target_f, target_cop, airborne=True)
             sol = self._solve(surf, zmin, z_max, target_f, target_cop)
@@ -245,7 +247,7 @@ class ContactModel:
         z = surf.z_m[jj, ii] - zmin
         n = self.exponent
         # force per cell in N for d in metres: K·d^n, K = k[kPa/mm]·1e3·(1e3)^n·A
-        kk = surf.attr[jj, ii] * 1e3 * (1e3 ** n) * self.cell_m ** 2
+        kk = 1e3 * (1e3 ** n) * self.cell_m ** 2 / np.maximum(surf.attr[jj, ii], 1e-12)
         ref = target_cop if target_cop is not None else np.array([xs.mean(), ys.mean()])
         dx, dy = xs[ii] - ref[0], ys[jj] - ref[1]
         h = self._solve_height(z, kk, target_f)

@@ -3,7 +3,9 @@
 A dataset is a folder::
 
     manifest.json          schema, grid, pitch, rate, subjects and their split, shards with
-                           frame counts and SHA-256, generator settings, seed, git revision
+                           frame counts and SHA-256 (and the carpet they were rendered on),
+                           generator settings, seed, git revision; "calibrations" when made
+    calibration-<carpet>.npz  each carpet's calibration (``generate(calibration=…)``, optional)
     shard-00000.npz        one shard: whole sequences, never split across shards
     ...
 
@@ -169,13 +171,18 @@ class Dataset:
         Sequences are kept whole (training windows span consecutive frames); a generator
         puts only subjects of one split in a sequence, and a mixed one is left out here.
         """
+        for _, shard in self.shards_with_info(split):
+            yield shard
+
+    def shards_with_info(self, split: str | None = None) -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+        """As :meth:`shards`, each with its manifest entry (file, frames, split, carpet, …)."""
         if split is not None and split not in SPLITS:
             raise ValueError(f"split must be one of {SPLITS}")
         splits = self.subject_split()
-        for i in range(len(self.manifest["shards"])):
+        for i, info in enumerate(self.manifest["shards"]):
             shard = self.load_shard(i)
             if split is None:
-                yield shard
+                yield info, shard
                 continue
             keep = np.zeros(len(shard["sequence"]), bool)
             for seq in np.unique(shard["sequence"]):
@@ -185,7 +192,7 @@ class Dataset:
                 if len(subjects) and (splits[subjects] == split).all():
                     keep |= rows
             if keep.any():
-                yield {k: (v if k == "fault_mask" else v[keep]) for k, v in shard.items()}
+                yield info, {k: (v if k == "fault_mask" else v[keep]) for k, v in shard.items()}
 
     def frame(self, index: int) -> dict[str, np.ndarray]:
         """One frame by global index (for `cavatar sim show`)."""

@@ -104,15 +104,15 @@ class Renderer:
 
     def __init__(self, grid: int, pitch_m: float, rate_hz: float, adc_bits: int, body: str = "lite") -> None:
         from edge.body import BodyModel
-        from sim.contact import ContactModel, tissue_stiffness
+        from sim.contact import ContactModel, regional_tissue
 
         self.grid, self.pitch_m, self.rate_hz, self.adc_bits = grid, pitch_m, rate_hz, adc_bits
         self.body = BodyModel.load(body)
         self.contact = ContactModel(grid, grid, pitch_m=pitch_m)
-        self.tissue = tissue_stiffness(self.body)
+        self.tissue = regional_tissue(self.body)
 
     def render(self, plan: Plan, subject_list: list[Any]) -> dict[str, np.ndarray]:
-        from sim.contact import mesh_centroid_m, subject_mass_kg
+        from sim.contact.track import track_contacts, track_dynamics
         from sim.motion import scene
         from sim.sensor import CarpetSensor, FrameStream, StreamConfig
 
@@ -128,17 +128,10 @@ class Renderer:
             "betas": np.zeros((n, p_max, 10), np.float32), "transl_m": np.zeros((n, p_max, 3), np.float32),
             "joints_m": np.zeros((n, p_max, 24, 3), np.float32),
         }
-        dt = 1.0 / self.rate_hz
         for slot, (track, subj_index) in enumerate(zip(sc.tracks, plan.subjects)):
-            betas = np.broadcast_to(track.betas, (n, len(track.betas)))
-            fw = self.body.forward(track.pose_aa, betas, track.transl_m, vertices=True)
-            verts, joints = fw["vertices"], fw["joints"]
-            mass = subject_mass_kg(self.body, track.betas)
-            com = np.stack([mesh_centroid_m(v, self.body.faces) for v in verts])
-            acc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0)
-            for t in range(n):
-                res = self.contact.pressure_kpa(verts[t], self.body.faces, mass, acc_z_m_s2=float(acc[t, 2]), com_m=com[t],
-                                                acc_xy_m_s2=acc[t, :2], tissue_kpa_per_mm=self.tissue)
+            fw, dyn = track_dynamics(self.body, track)
+            joints = fw["joints"]
+            for t, res in enumerate(track_contacts(self.contact, self.body, self.tissue, track, fw, dyn)):
                 pressure[t] += res.pressure_kpa
             out["present"][:, slot] = True
             out["subject"][:, slot] = subj_index
@@ -205,14 +198,28 @@ def _worker(args: tuple) -> tuple[int, dict[str, np.ndarray] | None]:
         return plan.index, None
 
 
+def _calibrate(args: tuple):
+    from sim.dataset.calibrate import carpet_calibration
+
+    carpet, grid, adc_bits, pitch_mm, method = args
+    return carpet_calibration(carpet, grid=grid, adc_bits=adc_bits, pitch_mm=pitch_mm, method=method)
+
+
 def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: float = 10.0, people: tuple[int, int] = (1, 1),
              grid: int = 96, pitch_mm: float = 19.05, rate_hz: float = 14.0, adc_bits: int = 12, seed: int = 0,
              activities: tuple[str, ...] = PAPER_ACTIVITIES, workers: int = 1, body: str = "lite",
-             progress: bool = True, overwrite: bool = False) -> Path:
+             progress: bool = True, overwrite: bool = False, calibration: str | None = None) -> Path:
+    """calibration: None, "installer" or "truth" — also write each carpet's calibration
+    (``calibration-<carpet>.npz``, see sim.dataset.calibrate), listed in the manifest and named
+    by each shard's ``carpet``, so that the board's path (counts → calibration → kPa) can be read
+    (export.data.load_tracks(board=True))."""
+    from sim.dataset.calibrate import METHODS
     from sim.motion import ACTIVITIES, Subject as MotionSubject
 
     if not 1 <= people[0] <= people[1] <= 3:
         raise ValueError(f"people must be a range within 1..3, got {people}")
+    if calibration is not None and calibration not in METHODS:
+        raise ValueError(f"calibration must be one of {METHODS}, got {calibration!r}")
     unknown = [a for a in activities if a not in ACTIVITIES]
     if unknown:
         raise ValueError(f"unknown activities {unknown}; known: {list(ACTIVITIES)}")
@@ -225,7 +232,8 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
     writer = DatasetWriter(out_dir, rows=grid, cols=grid, pitch_m=pitch_mm / 1000, rate_hz=rate_hz, activities=list(ACTIVITIES),
                            subjects=subject_records, source="sim", overwrite=overwrite,
                            settings={"seed": seed, "subjects": subjects, "seconds_per_activity": seconds_per_activity,
-                                     "people": list(people), "activities": list(activities), "adc_bits": adc_bits, "body": body})
+                                     "people": list(people), "activities": list(activities), "adc_bits": adc_bits, "body": body,
+                                     "calibration": calibration})
     os.environ["OMP_NUM_THREADS"] = os.environ["OPENBLAS_NUM_THREADS"] = "1"  # BLAS threads fight on 2 cores (workers inherit)
     jobs = [(p, motion_subjects, settings) for p in plans]
     t0, done, frames = time.monotonic(), 0, 0
@@ -242,7 +250,7 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
                     {"subjects": list(plan.subjects), "activities": [list(a) for a in plan.activities]})
             else:
                 writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed,
-                                            "people": len(plan.subjects)})
+                                            "people": len(plan.subjects), "carpet": plan.carpet_seed})
             next_index += 1
 
     def report(arrays: dict[str, np.ndarray] | None) -> None:
@@ -256,7 +264,10 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
             print(f"\r[{bar:<30}] {done}/{len(plans)} sequences, {frames} frames, {frames / el:.0f} frames/s, ETA {eta:.0f} s",
                   end="", file=sys.stderr, flush=True)
 
+    carpets = sorted({p.carpet_seed for p in plans}) if calibration else []
+    cal_jobs = [(c, grid, adc_bits, pitch_mm, calibration) for c in carpets]
     if workers <= 1:
+        calibrations = [_calibrate(job) for job in cal_jobs]
         for job in jobs:
             index, arrays = _worker(job)
             report(arrays)
@@ -264,10 +275,18 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
             flush()
     else:
         with ProcessPoolExecutor(max_workers=workers) as pool:
+            calibrations = list(pool.map(_calibrate, cal_jobs))
             for index, arrays in pool.map(_worker, jobs):
                 report(arrays)
                 results[index] = arrays
                 flush()
+    if calibration:
+        writer.manifest["calibrations"] = {}
+        for c, cal in zip(carpets, calibrations):
+            name = f"calibration-{c}.npz"
+            digest = cal.save(Path(out_dir) / name)
+            writer.manifest["calibrations"][str(c)] = {"file": name, "method": calibration, "sha256": digest,
+                                                       "validation_ok": cal.validation.get("ok")}
     writer.close()
     if progress:
         print(file=sys.stderr)

@@ -9,6 +9,8 @@ side); ``rng`` draws the per-repetition variety.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from sim.motion.keys import BASE, Timeline, both_feet, contacts, pose
@@ -55,10 +57,15 @@ def _reps(tl: Timeline, rep, seconds_left: float, rng, min_reps=1):
     d0 = tl.duration_s
     rep(tl)
     per = tl.duration_s - d0
-    n = max(min_reps, int(round(seconds_left / max(per, 1e-3))))
+    n = max(min_reps, int(seconds_left / max(per, 1e-3) + 0.1))  # whole repetitions at the subject's own tempo
     for _ in range(n - 1):
         rep(tl)
     return n0
+
+
+MAX_SQUAT_SCALE = 1.05  # of the squat template (knees 140°)
+MAX_BEND_SCALE = 1.1  # of the bending template (trunk 72° forward)
+MAX_STRETCH = 1.12  # an activity's keys last at most this much longer than the subject's tempo makes them
 
 
 def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 0.9)):
@@ -68,16 +75,27 @@ def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 
     a, b = min(a, 0.15 * seconds), min(b, 0.15 * seconds)
     tl.add(a, BASE, FEET, LF, label=STANDING)
     first = len(tl.keys)
-    body(tl, seconds - a - b)
-    tl.scale_to(seconds - b, fixed=first)
+    slot = seconds - a - b
+    body(tl, slot)
+    # Keep the activity's own tempo: stretch by at most MAX_STRETCH and stand for the rest
+    # (squeezing is unavoidable when even one repetition does not fit).
+    took = tl.duration_s - a
+    stretch = min(slot / max(took, 1e-9), MAX_STRETCH)
+    tl.scale_to(a + took * stretch, fixed=first)
+    rest = slot - took * stretch
+    if rest > 1e-6:  # a pause before the next activity, still part of this one (repetitions end in pauses too)
+        tl.add(rest, BASE, FEET, LF, label=label)
     tl.add(b, BASE, FEET, LF, label=STANDING)
     return tl
 
 
 # ----------------------------------------------------------------------------- standing activities
 
+HEEL_OFF_DEG = (25.0, 40.0)  # heel raise before a foot leaves the floor (toe-off)
+
+
 def _step(tl, style, rng, side, label, lift=(35, 50), turn=0.0, dur=0.8):
-    """One step in place with foot `side` (LF/RF): lift, put down, brief double support."""
+    """One step in place with foot `side` (LF/RF): heel off, lift, put down, brief double support."""
     hip, knee = _u(rng, *lift), _u(rng, 55, 80)
     swing = pose(left_hip=(-hip, 4, 0), left_knee=(knee, 0, 0), left_ankle=(-10, 0, 0),
                  right_shoulder=(-18, 0, 72), left_shoulder=(12, 0, -72), root=(0, 0, 3))
@@ -86,9 +104,12 @@ def _step(tl, style, rng, side, label, lift=(35, 50), turn=0.0, dur=0.8):
     stance = RF if side == LF else LF
     dur = dur * style.tempo * _u(rng, 0.9, 1.1)
     c = contacts(stance)
-    tl.add(0.45 * dur, styled(swing, style), c, stance, turn_rad=0.6 * turn, label=label)
-    tl.add(0.40 * dur, BASE, c, stance, turn_rad=0.4 * turn, label=label)
-    tl.add(0.15 * dur, BASE, FEET, stance, label=label)
+    heel_off = [0.0, 0.0]
+    heel_off[side] = _u(rng, *HEEL_OFF_DEG)  # the weight goes onto the stance foot, the swing heel rises first
+    tl.add(0.15 * dur, BASE, FEET, stance, heel=heel_off, label=label)
+    tl.add(0.40 * dur, styled(swing, style), c, stance, turn_rad=0.6 * turn, label=label)
+    tl.add(0.35 * dur, BASE, c, stance, turn_rad=0.4 * turn, label=label)
+    tl.add(0.10 * dur, BASE, FEET, stance, label=label)
 
 
 def stepping(style, rng, seconds, label):
@@ -108,11 +129,11 @@ def turning(style, rng, seconds, label):
 
         def rep(t):
             n = int(rng.integers(4, 7))
-            total = np.radians(_u(rng, 150, 200)) * (1 if rng.random() < 0.5 else -1)
+            total = np.radians(_u(rng, 120, 210) * style.amplitude) * (1 if rng.random() < 0.5 else -1)
             # Turning left (positive yaw) leads with the left foot.
             side[0] = LF if total > 0 else RF
             for _ in range(n):
-                _step(t, style, rng, side[0], label, lift=(20, 35), turn=total / n, dur=0.75)
+                _step(t, style, rng, side[0], label, lift=(20 * style.amplitude, 35 * style.amplitude), turn=total / n, dur=0.75)
                 side[0] = RF if side[0] == LF else LF
             t.add(_u(rng, 0.2, 0.6), BASE, FEET, LF if side[0] == RF else RF, label=label)
         _reps(tl, rep, left, rng)
@@ -129,7 +150,8 @@ def bending(style, rng, seconds, label):
                         left_shoulder=(-95, 0, -80), right_shoulder=(-95, 0, 80))
             side = _u(rng, -6, 6)
             down[J["spine2"], 1] = side  # a little twist to one side
-            d = 1.4 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 2.6 * style.tempo * _u(rng, 0.85, 1.15)
+            a = min(a, MAX_BEND_SCALE / style.amplitude)  # the trunk stops a little below horizontal
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.6), styled(down, style, a * 1.03), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
@@ -149,7 +171,8 @@ def squat(style, rng, seconds, label):
                 down = pose(down, left_shoulder=(0, -75, 0), right_shoulder=(0, 75, 0), left_elbow=(0, -5, 0), right_elbow=(0, 5, 0))
             else:  # hands together in front of the chest
                 down = pose(down, left_shoulder=(0, -45, -55), right_shoulder=(0, 45, 55), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0))
-            d = 1.5 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 3.4 * style.tempo * _u(rng, 0.85, 1.15)
+            a = min(a, MAX_SQUAT_SCALE / style.amplitude)  # knees stop near 147°, however flexible the person
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.5), styled(down, style, a), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
@@ -197,6 +220,7 @@ def raising_arms(style, rng, seconds, label):
 
 
 def lunge(style, rng, seconds, label):
+    style = replace(style, amplitude=float(np.clip(style.amplitude, 0.85, 1.1)))  # a lunge needs a long split stance
     def body(tl, left):
         side = [style.lead]
 
@@ -219,9 +243,9 @@ def lunge(style, rng, seconds, label):
             t.add(0.40 * tm, styled(split, style), contacts(back), back, heel=heel_split, label=label)
             t.add(0.10 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
             for _ in range(int(rng.integers(1, 3))):
-                t.add(0.8 * tm, deep, FEET, back, heel=heel_deep, label=label)
+                t.add(1.3 * tm, deep, FEET, back, heel=heel_deep, label=label)
                 t.add(_u(rng, 0.1, 0.4), deep, FEET, back, heel=heel_deep, label=label)
-                t.add(0.8 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
+                t.add(1.3 * tm, styled(split, style), FEET, back, heel=heel_split, label=label)
             t.add(0.45 * tm, styled(lift, style), contacts(back), back, label=label)
             t.add(0.40 * tm, BASE, contacts(back), back, label=label)
             t.add(0.3 * tm, BASE, FEET, back, label=label)
@@ -243,42 +267,49 @@ SIT_LONG = pose(root=(-8, 0, 0), left_hip=(-88, 0, 6), right_hip=(-88, 0, -6),
                 left_shoulder=(-30, 0, -70), right_shoulder=(-30, 0, 70), left_elbow=(0, -30, 0), right_elbow=(0, 30, 0))
 
 
+def crouch(p: np.ndarray, style) -> np.ndarray:
+    """A deep template (crouch, squat to the floor) as deep as this person goes: shallower for a
+    small range of motion, never deeper than the template (knees would pass 150°)."""
+    return styled(p, style, min(1.0, 1.0 / style.amplitude) if style.amplitude > 1.0 else 1.0)
+
+
 def _get_down(tl, style, label, end_pose, end_contact, end_anchor):
     tm = style.tempo
-    tl.add(0.9 * tm, SQUAT_LOW, FEET, LF, label=label)
-    tl.add(0.8 * tm, end_pose, FEET, SETTLE, label=label)  # the buttocks come down onto the floor
+    tl.add(1.6 * tm, crouch(SQUAT_LOW, style), FEET, LF, label=label)
+    tl.add(1.3 * tm, end_pose, FEET, SETTLE, label=label)  # the buttocks come down onto the floor
     tl.add(0.2 * tm, end_pose, end_contact, end_anchor, label=label)
 
 
 def _get_up(tl, style, label, from_pose, from_contact, from_anchor):
     tm = style.tempo
     tl.add(0.2 * tm, from_pose, from_contact, from_anchor, label=label)
-    tl.add(0.8 * tm, SQUAT_LOW, FEET, SETTLE, label=label)  # weight back onto the feet
-    tl.add(0.9 * tm, BASE, FEET, LF, label=label)
+    tl.add(1.3 * tm, crouch(SQUAT_LOW, style), FEET, SETTLE, label=label)  # weight back onto the feet
+    tl.add(1.6 * tm, BASE, FEET, LF, label=label)
 
 
 def sitting(style, rng, seconds, label):
+    sit_bent = styled(SIT_BENT, style)  # how deep this person folds: hips, knees, lean
     sit = contacts(BUTT, LF, RF)
 
     def body(tl, left):
-        _get_down(tl, style, label, SIT_BENT, sit, BUTT)
+        _get_down(tl, style, label, sit_bent, sit, BUTT)
 
         def rep(t):
             kind = rng.integers(0, 3)
             if kind == 0:  # lean forward, hug the knees
-                p = pose(SIT_BENT, spine1=(24, 0, 0), spine2=(14, 0, 0), left_shoulder=(-70, -10, -60),
+                p = pose(sit_bent, spine1=(24, 0, 0), spine2=(14, 0, 0), left_shoulder=(-70, -10, -60),
                          right_shoulder=(-70, 10, 60), left_elbow=(0, -60, 0), right_elbow=(0, 60, 0))
             elif kind == 1:  # look around, turn the trunk
                 s = 1 if rng.random() < 0.5 else -1
-                p = pose(SIT_BENT, spine2=(8, s * 15, 0), spine3=(5, s * 12, 0), neck=(0, s * 25, 0))
+                p = pose(sit_bent, spine2=(8, s * 15, 0), spine3=(5, s * 12, 0), neck=(0, s * 25, 0))
             else:  # lean back a little, arms relaxed
-                p = pose(SIT_BENT, spine1=(4, 0, 0), spine2=(2, 0, 0), left_shoulder=(-20, 0, -70), right_shoulder=(-20, 0, 70))
+                p = pose(sit_bent, spine1=(4, 0, 0), spine2=(2, 0, 0), left_shoulder=(-20, 0, -70), right_shoulder=(-20, 0, 70))
             d = 1.6 * style.tempo * _u(rng, 0.8, 1.2)
-            t.add(0.5 * d, styled(p, style, 1.0, SIT_BENT), sit, BUTT, label=label)
-            t.add(_u(rng, 0.3, 1.0), styled(p, style, 1.0, SIT_BENT), sit, BUTT, label=label)
-            t.add(0.5 * d, SIT_BENT, sit, BUTT, label=label)
-        _reps(tl, rep, left - 5.0 * style.tempo, rng)
-        _get_up(tl, style, label, SIT_BENT, sit, BUTT)
+            t.add(0.5 * d, styled(p, style, 1.0, sit_bent), sit, BUTT, label=label)
+            t.add(_u(rng, 0.3, 1.0), styled(p, style, 1.0, sit_bent), sit, BUTT, label=label)
+            t.add(0.5 * d, sit_bent, sit, BUTT, label=label)
+        _reps(tl, rep, left - 6.4 * style.tempo, rng)
+        _get_up(tl, style, label, sit_bent, sit, BUTT)
     return _frame(style, rng, seconds, label, body)
 
 
@@ -293,25 +324,27 @@ CURL_UP = pose(root=(-30, 0, 0), left_hip=(-100, 0, 8), right_hip=(-100, 0, -8),
 
 
 def sit_up(style, rng, seconds, label):
+    sit_bent, lie_bent = styled(SIT_BENT, style), styled(LIE_BENT, style)
+    curl = styled(CURL_UP, style, 1.0, LIE_BENT)  # how far this person curls up
     sit = contacts(BUTT, LF, RF)
     lie = contacts(BUTT, BACK, LF, RF)
 
     def body(tl, left):
-        _get_down(tl, style, label, SIT_BENT, sit, BUTT)
-        tl.add(1.0 * style.tempo, LIE_BENT, sit, BUTT, label=label)
-        tl.add(0.2, LIE_BENT, lie, BUTT, label=label)
+        _get_down(tl, style, label, sit_bent, sit, BUTT)
+        tl.add(1.6 * style.tempo, lie_bent, sit, BUTT, label=label)
+        tl.add(0.2, lie_bent, lie, BUTT, label=label)
 
         def rep(t):
             a = _u(rng, 0.75, 1.05)
-            up = styled(CURL_UP, style, a, LIE_BENT)
-            d = 1.5 * style.tempo * _u(rng, 0.85, 1.15)
+            up = styled(curl, style, a, lie_bent)
+            d = 3.0 * style.tempo * _u(rng, 0.85, 1.15)
             t.add(0.5 * d, up, sit, BUTT, label=label)
             t.add(_u(rng, 0.05, 0.3), up, sit, BUTT, label=label)
-            t.add(0.5 * d, LIE_BENT, sit, BUTT, label=label)
-            t.add(_u(rng, 0.1, 0.5), LIE_BENT, lie, BUTT, label=label)
-        _reps(tl, rep, left - 7.0 * style.tempo, rng)
-        tl.add(1.0 * style.tempo, SIT_BENT, sit, BUTT, label=label)
-        _get_up(tl, style, label, SIT_BENT, sit, BUTT)
+            t.add(0.5 * d, lie_bent, sit, BUTT, label=label)
+            t.add(_u(rng, 0.1, 0.5), lie_bent, lie, BUTT, label=label)
+        _reps(tl, rep, left - 9.6 * style.tempo, rng)
+        tl.add(1.6 * style.tempo, sit_bent, sit, BUTT, label=label)
+        _get_up(tl, style, label, sit_bent, sit, BUTT)
     return _frame(style, rng, seconds, label, body)
 
 
@@ -331,35 +364,36 @@ _TOES = 72.0
 def push_up(style, rng, seconds, label):
     """Down to a crouch with the hands on the floor, hop both feet back into a plank (hands
     carry the body meanwhile), push-ups, hop the feet forward again, stand up."""
+    squat_low, crouch_hands = crouch(SQUAT_LOW, style), crouch(CROUCH_HANDS, style)
     four = contacts(LF, RF, LH, RH)
     hands = contacts(LH, RH)
     toes = (_TOES, _TOES)
 
     def body(tl, left):
         tm = style.tempo
-        tl.add(0.9 * tm, SQUAT_LOW, FEET, LF, label=label)
-        tl.add(0.7 * tm, CROUCH_HANDS, FEET, LF, label=label)
-        tl.add(0.2 * tm, CROUCH_HANDS, four, LH, label=label)
-        tl.add(0.25 * tm, HOP, hands, LH, heel=(30, 30), label=label)
-        tl.add(0.25 * tm, PLANK, hands, LH, heel=toes, label=label)
+        tl.add(1.6 * tm, squat_low, FEET, LF, label=label)
+        tl.add(1.0 * tm, crouch_hands, FEET, LF, label=label)
+        tl.add(0.2 * tm, crouch_hands, four, LH, label=label)
+        tl.add(0.35 * tm, HOP, hands, LH, heel=(30, 30), label=label)
+        tl.add(0.35 * tm, PLANK, hands, LH, heel=toes, label=label)
         tl.add(0.3 * tm, PLANK, four, LF, heel=toes, label=label)  # the toes carry the body now
 
         def rep(t):
             a = _u(rng, 0.7, 1.0)
             down = PLANK + (PLANK_DOWN - PLANK) * a * min(style.amplitude, 1.0)
-            d = 1.3 * tm * _u(rng, 0.85, 1.15)
+            d = 2.6 * tm * _u(rng, 0.85, 1.15)
             t.add(0.5 * d, down, four, LF, heel=toes, label=label)
             t.add(_u(rng, 0.05, 0.3), down, four, LF, heel=toes, label=label)
             t.add(0.5 * d, PLANK, four, LF, heel=toes, label=label)
             t.add(_u(rng, 0.1, 0.5), PLANK, four, LF, heel=toes, label=label)
-        _reps(tl, rep, left - 5.0 * tm, rng)
+        _reps(tl, rep, left - 7.0 * tm, rng)
         tl.add(0.2 * tm, PLANK, four, LF, heel=toes, label=label)
-        tl.add(0.25 * tm, HOP, hands, LH, heel=(30, 30), label=label)
-        tl.add(0.25 * tm, CROUCH_HANDS, hands, LH, label=label)
-        tl.add(0.3 * tm, CROUCH_HANDS, four, LH, label=label)
-        tl.add(0.2 * tm, CROUCH_HANDS, FEET, LF, label=label)
-        tl.add(0.7 * tm, SQUAT_LOW, FEET, LF, label=label)
-        tl.add(0.9 * tm, BASE, FEET, LF, label=label)
+        tl.add(0.35 * tm, HOP, hands, LH, heel=(30, 30), label=label)
+        tl.add(0.35 * tm, crouch_hands, hands, LH, label=label)
+        tl.add(0.3 * tm, crouch_hands, four, LH, label=label)
+        tl.add(0.2 * tm, crouch_hands, FEET, LF, label=label)
+        tl.add(1.0 * tm, squat_low, FEET, LF, label=label)
+        tl.add(1.6 * tm, BASE, FEET, LF, label=label)
     return _frame(style, rng, seconds, label, body)
 
 

@@ -56,8 +56,8 @@ class Subject:
         betas = np.clip(rng.normal(0.0, 1.0, 10), -3.0, 3.0)
         style = Style(
             tempo=float(np.clip(rng.normal(1.0, 0.12), 0.75, 1.35)),
-            amplitude=float(np.clip(rng.normal(1.0, 0.08), 0.82, 1.12)),
-            asymmetry=float(np.clip(rng.normal(0.0, 0.05), -0.12, 0.12)),
+            amplitude=float(np.clip(rng.normal(1.0, 0.15), 0.7, 1.2)),  # people differ far more than ±8 % (issue 13)
+            asymmetry=float(np.clip(rng.normal(0.0, 0.07), -0.15, 0.15)),
             sway_deg=float(rng.uniform(0.5, 2.5)),
             lead=int(rng.integers(0, 2)),
             toe_out_deg=float(rng.uniform(2.0, 12.0)),
@@ -174,9 +174,13 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
         end = mirror(ds_k) if swing == RF else ds_k
         m = mirror(mid) if swing == LF else mid
         frac = 0.5 if front is None else 1.0
+        heel_mid, heel_off = [0.0, 0.0], [0.0, 0.0]
+        heel_mid[stance] = 12.0  # late stance: the stance heel rises (heel off) …
+        heel_off[stance] = _u(rng, *acts.HEEL_OFF_DEG)  # … and the foot leaves from its toes (toe off)
+        heel_mid[swing] = heel_off[swing] = -HEEL_STRIKE_DEG * max(short, 0.7)  # the swing foot lands on its heel, toes up
         tl.add(0.5 * step_dur, m, contacts(stance), stance, turn_rad=0.5 * turn, label=label)
-        tl.add(0.5 * step_dur, end, contacts(stance), stance, turn_rad=0.5 * turn, label=label)
-        tl.add(0.12 * style.tempo, end, FEET, stance, label=label)
+        tl.add(0.5 * step_dur, end, contacts(stance), stance, turn_rad=0.5 * turn, heel=heel_mid, label=label)
+        tl.add(0.12 * style.tempo, end, FEET, stance, heel=heel_off, label=label)
         head += turn
         pos = pos + frac * short * step * np.array([np.sin(head), -np.cos(head)])
         t_left -= step_dur + 0.12 * style.tempo
@@ -191,6 +195,9 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
     tl.scale_to(seconds - 0.2)
     tl.add(0.2, BASE, FEET, LF, label=STANDING)
     return tl
+
+
+HEEL_STRIKE_DEG = 15.0  # toes up at heel strike (the foot is flat by mid-stance)
 
 
 def _u(rng, lo, hi):
@@ -251,7 +258,10 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     toe = np.radians(style.toe_out_deg)
     foot_yaw = np.stack([heading + toe, heading - toe], 1)
     hand_rot = _flat_hands(heading)
-    transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy)
+    balance = np.ones(n, bool)  # walking too: its COM follows the path whose ZMP is on the stance foot
+    seated = lab == ACTIVITIES.index("sitting")
+    transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
+                        seated=seated)
     pose_aa = matrix_to_rotvec(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
 

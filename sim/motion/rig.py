@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from edge.body import SMPL_PARENTS, BodyModel
 from edge.body import lbs
+from sim.motion.balance import foot_geometry, support_point, zmp_com
 
 J = {name: i for i, name in enumerate((
     "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
@@ -143,6 +144,7 @@ class Rig:
         self._wvh = (self._weights[:, :, None] * self._vh[:, None, :]).reshape(len(shaped), -1).T.astype(np.float32)  # (J·4, V)
         dominant = np.argmax(a.weights, axis=1)
         self.part_vertices = [np.flatnonzero(np.isin(dominant, joints)) for joints in _PART_JOINTS]
+        self.pelvis_vertices = np.flatnonzero(dominant == J["pelvis"])  # sacrum and buttocks, not the thighs
         # A flat foot (canonical orientation upright): height of the ball joint above the sole.
         up = np.tile(np.eye(3), (1, 24, 1, 1))
         up[0, 0] = UPRIGHT
@@ -151,6 +153,11 @@ class Rig:
         self.ball_height = {p: float(g_t[0, LOCK_JOINT[p], 2] - z[self.part_vertices[p]].min()) for p in (LF, RF)}
         self.stand_height = float(-z.min())  # pelvis height standing in the rest pose
         self.foot_vec = {p: self.rest[LOCK_JOINT[p]] - self.rest[_CHAINS[p][2]] for p in (LF, RF)}  # ankle → ball, canonical
+        from sim.contact.segments import SegmentMassModel
+        self.mass_model = SegmentMassModel(model, self.betas)
+        self.com_height = self.stand_height + float(self.mass_model.rest_com_m[1])  # standing COM above the floor
+        self.foot_geometry = {p: foot_geometry(self.rest_vertices, self.part_vertices[p], self.rest[_CHAINS[p][2]],
+                                               self.rest[LOCK_JOINT[p]]) for p in (LF, RF)}
         self.reach = {q: float(np.linalg.norm(self.rest[_CHAINS[q][1]] - self.rest[_CHAINS[q][0]])
                                + np.linalg.norm(self.rest[_CHAINS[q][2]] - self.rest[_CHAINS[q][1]])) for q in _CHAINS}
 
@@ -215,7 +222,8 @@ class Rig:
     # ------------------------------------------------------------------ ground contact
     def ground(self, local: np.ndarray, contact: np.ndarray, anchor: np.ndarray, heel_deg: np.ndarray,
                foot_yaw: np.ndarray, hand_rot: np.ndarray | None = None, start_xy=(0.0, 0.0),
-               iterations: int = 3) -> np.ndarray:
+               iterations: int = 3, balance: np.ndarray | None = None, rate_hz: float = 14.0,
+               seated: np.ndarray | None = None) -> np.ndarray:
         """Place a posed sequence on the floor; returns transl (T,3) (the pelvis).
 
         local: (T,24,3,3) local rotations, joint 0 the world orientation (modified in place:
@@ -361,14 +369,17 @@ class Rig:
             target = table[inv]
             if q in (LF, RF):  # the ball's height follows the heel raise (sole or toes on the floor)
                 on = c[frames]
-                zf = np.where(heel[frames, q] > 0, lock_local[frames, q, 2] - part_low[frames, q], self.ball_height[q])
+                zf = np.where(heel[frames, q] != 0, lock_local[frames, q, 2] - part_low[frames, q], self.ball_height[q])
                 # One ball height per contact span, the middle of what the heel raise asks for: the
                 # ball stays put while the toes or the sole stay within a few mm of the floor.
-                sid = np.unique(span0[on], return_inverse=True)[1]
+                rock = on & (heel[frames, q] < 0)  # heel strike (toes up): the foot rolls on its heel,
+                sole = on & ~rock                  # the ball comes down frame by frame
+                sid = np.unique(span0[sole], return_inverse=True)[1]
                 lo, hi = np.full(sid.max() + 1 if len(sid) else 0, np.inf), np.full(sid.max() + 1 if len(sid) else 0, -np.inf)
-                np.minimum.at(lo, sid, zf[on])
-                np.maximum.at(hi, sid, zf[on])
-                target[on, 2] = 0.5 * (lo + hi)[sid]
+                np.minimum.at(lo, sid, zf[sole])
+                np.maximum.at(hi, sid, zf[sole])
+                target[sole, 2] = 0.5 * (lo + hi)[sid]
+                target[rock, 2] = zf[rock]
                 target = target - np.einsum("nij,j->ni", foot_rot[q][frames], self.foot_vec[q])
             solve[q] = (frames, weight[frames], target, c[frames])
 
@@ -382,6 +393,14 @@ class Rig:
                 self.two_bone_ik(local, q, frames, end - transl[frames], (g_rot[frames], g_t[frames]))
             g_rot, g_t = self.fk(local)
             orient_ends(all_frames, g_rot)
+
+        # ---- 1b. balance: the pelvis carries the COM along the path whose ZMP stays on the feet
+        if seated is not None:  # after the feet are on their locks: the lever to them is known
+            put_limbs(*self.fk(local))
+            self._sit_over_buttocks(local, contact, anchor, np.asarray(seated, bool))
+        if balance is not None:
+            put_limbs(*self.fk(local))
+            self._balance(local, transl, contact, anchor, heel, foot_rot, np.asarray(balance, bool), rate_hz, put_limbs)
 
         # ---- 2. reach, IK, rest, lift
         moved_body = 0.0
@@ -448,9 +467,57 @@ class Rig:
             put_limbs(*self.fk(local))
         return transl
 
+    def _balance(self, local, transl, contact, anchor, heel, foot_rot, balance, rate_hz, put_limbs, rounds: int = 3) -> None:
+        """Shift the pelvis (in place) where the body stands on its feet alone so that the COM
+        follows the path whose zero-moment point is the feet's support point; faded in and
+        out over a few frames around those spans. The locked feet are put back by IK."""
+        feet = contact[:, [LF, RF]]
+        feet_only = feet.any(1) & ~contact[:, [LH, RH, BUTT, BACK]].any(1) & np.isin(anchor, (LF, RF)) & balance
+        if not feet_only.any():
+            return
+        wgt = _near_contact_weight(feet_only, _SMOOTH + 1)
+        desired = None
+        for _ in range(rounds):
+            g_rot, g_t = self.fk(local)
+            com = transl[:, :2] + self.mass_model.com_from_fk(g_rot, g_t)[:, :2]
+            if desired is None:
+                p = com.copy()
+                pts = {q: support_point(transl + g_t[:, LOCK_JOINT[q]], foot_rot[q], self.foot_geometry[q],
+                                        heel[:, q]) for q in (LF, RF)}
+                both = feet_only & feet.all(1)
+                p[both] = 0.5 * (pts[LF][both] + pts[RF][both])
+                for q, other in ((LF, RF), (RF, LF)):
+                    one = feet_only & contact[:, q] & ~contact[:, other]
+                    p[one] = pts[q][one]
+                desired = zmp_com(p, rate_hz, self.com_height)
+            transl[:, :2] += wgt[:, None] * (desired - com)
+            put_limbs(g_rot, g_t)
+
+    def _sit_over_buttocks(self, local, contact, anchor, seated, rounds: int = 3) -> None:
+        """Sitting on the floor without the hands: flex (or extend) the lower spine so that the
+        COM lies over the seat, SIT_COM_FRAC of the way from the buttocks toward the feet (the
+        buttocks then carry most of the weight, as a seated body's own mass distribution says)."""
+        sit = (anchor == BUTT) & contact[:, BUTT] & ~contact[:, [BACK, LH, RH]].any(1) & seated
+        if not sit.any():
+            return
+        wgt = _near_contact_weight(sit, _SMOOTH + 1)
+        f = np.flatnonzero(wgt > 0)
+        for _ in range(rounds):
+            g_rot, g_t = self.fk(local[f])
+            com = self.mass_model.com_from_fk(g_rot, g_t)
+            pv = self._skin_rows(local[f], g_rot, g_t, [0, 1, 2])[:, self.pelvis_vertices]
+            seat = pv[np.arange(len(f)), pv[:, :, 2].argmin(1)]
+            feet = 0.25 * sum(g_t[:, J[n]] for n in ("left_ankle", "right_ankle", "left_foot", "right_foot"))
+            d = feet[:, :2] - seat[:, :2]
+            u = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-6)
+            e = np.sum((com[:, :2] - seat[:, :2] - SIT_COM_FRAC * d) * u, 1)  # > 0: COM too far toward the feet
+            angle = np.clip(-e / _UPPER_LEVER_M, -0.5, 0.5) * wgt[f]
+            local[f, J["spine1"]] = local[f, J["spine1"]] @ rot_x(angle)
+
     def _rest_on_back(self, local: np.ndarray, contact: np.ndarray) -> None:
         """Where the back and the buttocks are both scheduled on the floor, pitch the root so
-        that they are equally low (ramped in and out over a few frames)."""
+        that the back and the pelvis (sacrum, buttocks; not the backs of the thighs, which a
+        flexed hip lowers) are equally low, the pelvis _SACRUM_DROP lower (ramped in and out over a few frames)."""
         wgt = _near_contact_weight(contact[:, BACK] & contact[:, BUTT], 4)
         f = np.flatnonzero(wgt > 0)
         if len(f) == 0:
@@ -458,7 +525,7 @@ class Rig:
         for _ in range(4):
             g = self.fk(local[f])
             z = self.vertex_z(local[f], g)
-            dz = z[:, self.part_vertices[BACK]].min(1) - z[:, self.part_vertices[BUTT]].min(1)
+            dz = z[:, self.part_vertices[BACK]].min(1) - z[:, self.pelvis_vertices].min(1) - _SACRUM_DROP
             d = g[1][:, LOCK_JOINT[BACK]] - g[1][:, LOCK_JOINT[BUTT]]
             d[:, 2] = 0.0
             length = np.maximum(np.linalg.norm(d, axis=1), 0.05)
@@ -470,6 +537,9 @@ class Rig:
 
 
 _SMOOTH = 4  # frames over which transl corrections are spread
+SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
+_UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
+_SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis
 _SINK = 0.008  # m a locked foot/hand may press into the floor before the body is lifted
 
 

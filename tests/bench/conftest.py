@@ -62,5 +62,7 @@ def bundle_without_weights(tiny_bundle, tmp_path_factory):
     manifest = json.loads((tiny_bundle / "manifest.json").read_text())
     manifest.pop("weights", None)
     manifest["files"] = {f: sha256_file(out / f) for f in ("encoder.onnx", "head.onnx")}
-    (out / "manifest.json").write_text(json.dumps(manifest))
+    from edge.infer.bundle import write_manifest
+
+    write_manifest(out, manifest)
     return out

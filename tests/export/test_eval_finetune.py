@@ -54,10 +54,21 @@ def test_tables_are_zero_for_the_truth_and_positive_for_the_baseline(tiny_data):
     frames = np.arange(0, len(tr), 5)
     truth = _errors(tr.pose_aa[frames], tr.betas[frames], tr.transl_m[frames], tr, frames, lite, full)
     assert truth["mpjpe_cm"].max() < 1e-3 and truth["pve_cm"].max() < 1e-3 and truth["transl_cm"].max() < 1e-6
+    assert truth["pa_mpjpe_cm"].max() < 1e-3 and truth["local_mpjpe_cm"].max() < 1e-3 and truth["heading_deg"].max() < 1e-3
+    # the truth turned 180° about the vertical: heading 180°, the local pose (root-aligned) and PA still perfect
+    from edge.infer.heading import turn_half
+
+    turned = _errors(turn_half(tr.pose_aa[frames]), tr.betas[frames], tr.transl_m[frames], tr, frames, lite, full,
+                     model_pose_aa=tr.pose_aa[frames])
+    np.testing.assert_allclose(turned["heading_deg"], 180.0, atol=1e-3)
+    assert turned["local_mpjpe_cm"].max() < 1e-3 and turned["pa_mpjpe_cm"].max() < 1e-3 and turned["mpjpe_cm"].min() > 1.0
+    assert turned["model_heading_deg"].max() < 1e-3 and turned["model_mpjpe_cm"].max() < 1e-3
     base = baseline_errors(mean_pose(load_tracks(tiny_data, "train")), [tr], PITCH, frame_stride=5, bodies=(lite, full))
     assert base["mpjpe_cm"].mean() > 1.0 and base["pve_cm"].mean() > 1.0
     s = summarise(truth, base)
     assert s["overall"]["mpjpe_vs_baseline"] < 1e-3 and len(s["by_joint_cm"]) == 24
+    t = summarise(turned)["overall"]
+    assert t["heading_over90_pct"] == 100.0 and t["model_heading_over45_pct"] == 0.0 and t["heading_median_deg"] > 179.9
 
 
 def test_eval_cli_writes_json_and_markdown(bundle, tiny_data, tmp_path, capsys):
@@ -70,7 +81,23 @@ def test_eval_cli_writes_json_and_markdown(bundle, tiny_data, tmp_path, capsys):
     for row in result["by_activity"].values():
         assert np.isfinite([row["mpjpe_cm"], row["pve_cm"], row["transl_cm"]]).all()
     assert "### per activity" in md and "mean pose at CoP (baseline)" in md and "| left_wrist |" in md
-    assert "MPJPE" in capsys.readouterr().out
+    assert "model alone (heading not resolved)" in md and "PA-MPJPE" in md and "root-aligned" in md
+    o = result["overall"]
+    for k in ("pa_mpjpe_cm", "local_mpjpe_cm", "heading_median_deg", "heading_over45_pct", "heading_over90_pct",
+              "model_heading_over90_pct"):
+        assert np.isfinite(o[k])
+    assert o["pa_mpjpe_cm"] <= o["mpjpe_cm"] and 0 <= o["heading_over90_pct"] <= o["heading_over45_pct"] <= 100
+    assert "heading median" in capsys.readouterr().out
+    # the paper's protocol: training subjects, the last 10 % of every track in time
+    assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--protocol", "seen-time", "--stride", "1",
+                 "--no-resolve-heading", "--out", str(tmp_path / "seen")]) == 0
+    seen = json.loads((tmp_path / "seen.json").read_text())
+    from export.data import load_tracks
+
+    train = load_tracks(tiny_data, "train")
+    assert seen["setup"]["split"] == "train" and "80/10/10" in seen["setup"]["protocol"]
+    assert seen["overall"]["frames"] == sum(len(t) - int(np.ceil(0.9 * len(t))) for t in train)
+    assert "model_heading_over90_pct" not in seen["overall"] and seen["setup"]["heading"] == "model alone"
     assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--people", "3", "--out", str(tmp_path / "x")]) == 2
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from export.metrics import (heading_error_rad, joint_errors, local_mpjpe, mpjpe, pa_mpjpe, procrustes_align, pve,
+from export.metrics import (heading_error_rad, heading_rad, joint_errors, local_mpjpe, mpjpe, pa_mpjpe, procrustes_align, pve,
                             with_true_orientation)
 
 UPRIGHT = np.array([np.pi / 2, 0.0, 0.0])  # canonical Y up → carpet z up
@@ -71,6 +71,13 @@ def test_heading_error_ignores_a_pure_tilt_and_wraps():
     assert np.allclose(heading_error_rad(tilted, true), 0, atol=1e-9)
     turned = (Rotation.from_rotvec([0, 0, np.radians(270)]) * Rotation.from_rotvec(UPRIGHT)).as_rotvec()
     assert np.isclose(heading_error_rad(turned, UPRIGHT), np.radians(-90))
+
+
+def test_heading_of_one_body_is_its_turn_from_upright():
+    turns = np.radians([0.0, 45.0, -100.0, 180.0])
+    orient = (Rotation.from_rotvec(turns[:, None] * [0, 0, 1]) * Rotation.from_rotvec(UPRIGHT)).as_rotvec()
+    assert np.allclose(np.cos(heading_rad(orient) - turns), 1)
+    assert np.allclose(heading_rad(UPRIGHT), 0)
 
 
 def test_local_mpjpe_ignores_the_global_orientation():

@@ -7,7 +7,7 @@ import pytest
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, box_gaps, person_track, scene
-from sim.motion.rig import LOCK_JOINT, Rig
+from sim.motion.rig import _SACRUM_DROP, LOCK_JOINT, Rig
 
 RATE = 14.0
 SECONDS = 8.0
@@ -29,7 +29,8 @@ NAMES = [a for a in ACTIVITIES if a != "standing"]
 
 
 def span_drift(track: Track, joints: np.ndarray, part: int) -> float:
-    """Largest distance a locked point moves from where its contact span began."""
+    """Largest horizontal distance a locked point moves from where its contact span began (it may
+    rise: a foot rolling from its heel onto its sole lowers its ball onto the floor)."""
     c = track.contact[:, part]
     pts = joints[:, LOCK_JOINT[part]]
     worst, start = 0.0, None
@@ -37,7 +38,7 @@ def span_drift(track: Track, joints: np.ndarray, part: int) -> float:
         if c[t] and (t == 0 or not c[t - 1]):
             start = pts[t]
         if c[t]:
-            worst = max(worst, float(np.linalg.norm(pts[t] - start)))
+            worst = max(worst, float(np.linalg.norm(pts[t, :2] - start[:2])))
     return worst
 
 
@@ -71,7 +72,10 @@ def test_scheduled_contacts_touch_the_floor(tracks, name):
         on = tr.contact[:, p]
         if on.any():
             low = v[on][:, rig.part_vertices[p], 2].min(1)
-            assert low.max() < 0.015, f"{CONTACT_PARTS[p]} scheduled on the floor but {low.max() * 100:.1f} cm up"
+            # Supine, the heavy pelvis sinks deeper into its soft tissue than the back (rig._SACRUM_DROP):
+            # the back's rigid surface may stay up to that much higher; the contact physics loads both.
+            limit = 0.015 + (_SACRUM_DROP if CONTACT_PARTS[p] == "back" else 0.0)
+            assert low.max() < limit, f"{CONTACT_PARTS[p]} scheduled on the floor but {low.max() * 100:.1f} cm up"
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -12,7 +12,7 @@ onnx = pytest.importorskip("onnx")
 from onnx import TensorProto, helper, numpy_helper  # noqa: E402
 
 from edge.infer import BundleError, ModelBundle  # noqa: E402
-from edge.infer.bundle import SCHEMA, sha256_file  # noqa: E402
+from edge.infer.bundle import SCHEMA, sha256_file, write_manifest  # noqa: E402
 
 H, W, T, F = 16, 12, 40, 8
 SIZES = {"rot6d": 144, "betas": 10, "transl_rel_m": 3, "activity_logits": 12, "confidence": 1}
@@ -68,7 +68,7 @@ def make_bundle(folder: Path, grid=(H, W)) -> Path:
                 "activities": [f"a{i}" for i in range(12)],
                 "body_model": {"name": "lite", "file": "cavatar_body_lite.npz", "sha256": sha256_file(shipped_model_path("lite"))},
                 "files": {f: sha256_file(folder / f) for f in ("encoder.onnx", "head.onnx")}}
-    (folder / "manifest.json").write_text(json.dumps(manifest))
+    write_manifest(folder, manifest)
     return folder
 
 
@@ -112,7 +112,7 @@ def test_manifest_grid_that_disagrees_with_the_graph_is_refused(tmp_path):
     folder = make_bundle(tmp_path / "b")
     m = json.loads((folder / "manifest.json").read_text())
     m["grid"] = [32, 32]
-    (folder / "manifest.json").write_text(json.dumps(m))
+    write_manifest(folder, m)  # a consistent manifest that is wrong about its graph
     with pytest.raises(BundleError, match="encoder.onnx"):
         ModelBundle.load(folder)
 
@@ -125,7 +125,7 @@ def test_missing_and_unlisted_files_and_body_model(tmp_path):
     folder = make_bundle(tmp_path / "c")
     m = json.loads((folder / "manifest.json").read_text())
     m["body_model"]["sha256"] = "0" * 64
-    (folder / "manifest.json").write_text(json.dumps(m))
+    write_manifest(folder, m)
     with pytest.raises(BundleError, match="body model 'lite'"):
         ModelBundle.load(folder)
     with pytest.raises(BundleError, match="no manifest.json"):

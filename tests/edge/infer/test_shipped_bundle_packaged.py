@@ -18,7 +18,7 @@ def test_every_file_of_the_shipped_bundle_is_package_data():
     bundles = sorted((ROOT / "edge" / "models").glob("*/manifest.json"))
     assert bundles
     for manifest in bundles:
-        names = ["manifest.json", *json.loads(manifest.read_text())["files"]]
+        names = ["manifest.json", "manifest.json.sha256", *json.loads(manifest.read_text())["files"]]
         for name in names:
             rel = f"{manifest.parent.name}/{name}"
             assert any(fnmatch.fnmatch(rel, p) for p in patterns), f"{rel} is not in setup.cfg's edge.models package_data"

@@ -51,7 +51,7 @@ def test_sigterm_stops_cleanly(tmp_path, sim_calibration):
     assert len(records) == status["publish"]["published"] > 0
     assert status["publish"]["last_seq"] == records[-1]["seq"] and status["publish"]["queued"] == 0
     assert "frames" in err and "stopped (stop requested)" in err
-    assert not list(out.glob(".*.tmp"))  # the atomic status writes left no temporary file
+    assert not list(out.glob(".*.part*")) and not list(out.glob(".*.tmp"))  # the atomic writes left no temporary file
 
 
 def test_a_bad_configuration_exits_2_listing_every_problem_and_writes_nothing(tmp_path, capsys):

@@ -104,33 +104,42 @@ def test_last_will_says_offline_when_the_publisher_is_killed(broker, subscribe):
 def test_home_assistant_discovery_payloads(broker, subscribe):
     ha = subscribe(broker.port, ["homeassistant/#"])
     sink = open_sink(broker.url("qos=0&ha=1"), device=DEVICE)
+    expected = {topic for topic, _ in T.ha_discovery()}
     try:
         assert sink.wait_connected(10)
-        expected = {
-            f"homeassistant/binary_sensor/{DEVICE}_presence/config",
-            f"homeassistant/sensor/{DEVICE}_people/config",
-            f"homeassistant/sensor/{DEVICE}_activity/config",
-            f"homeassistant/binary_sensor/{DEVICE}_person_down/config",  # fall events (docs/falls.md)
-            f"homeassistant/event/{DEVICE}_fall/config",
-        }
+        assert len(expected) == 8
+        events = {f"homeassistant/binary_sensor/{DEVICE}_person_down/config",  # fall events (docs/falls.md)
+                  f"homeassistant/event/{DEVICE}_fall/config"}
+        expected |= events
         assert wait_until(lambda: expected <= {t for t, *_ in ha.messages}, 10)
         n_before = len(ha.messages)
         # Home Assistant restarts and announces itself: discovery is sent again
         import paho.mqtt.publish as publish
 
         publish.single("homeassistant/status", "online", hostname="127.0.0.1", port=broker.port)
-        assert wait_until(lambda: len(ha.messages) >= n_before + 3 + 1, 10)
+        assert wait_until(lambda: len(ha.messages) >= n_before + len(expected) + 1, 10)
+        # the runtime's info names the model's activities: the activity sensor becomes an enum of them
+        sink.publish_info({"state": "running", "activities": ["walking", "squat"]})
+        activity = f"homeassistant/sensor/{DEVICE}_activity/config"
+        assert wait_until(lambda: "options" in json.loads([p for t, p, *_ in ha.messages if t == activity][-1]), 10)
     finally:
         sink.close()
     configs = {t: json.loads(p) for t, p, _, _ in ha.messages if t.endswith("/config")}
     assert set(configs) == expected
+    carpet = {f"homeassistant/binary_sensor/{DEVICE}_presence/config", f"homeassistant/sensor/{DEVICE}_people/config",
+              activity}
     for topic, cfg in configs.items():
-        assert cfg["availability_topic"] == T.status
-        assert cfg["payload_available"] == "online" and cfg["payload_not_available"] == "offline"
-        assert cfg["state_topic"] == (T.events if topic.endswith(("_person_down/config", "_fall/config")) else T.presence)
-        assert cfg["unique_id"].startswith("cavatar_") and "value_template" in cfg
-        assert cfg["device"]["identifiers"] == [f"cavatar_{DEVICE}"]
+        pairs = [(a["topic"], a["payload_available"], a["payload_not_available"]) for a in cfg["availability"]]
+        if topic in carpet or topic in events:  # the runtime AND the board (frames arriving)
+            assert cfg["availability_mode"] == "all"
+            assert cfg["state_topic"] == (T.events if topic in events else T.presence)
+            assert pairs == [(T.status, "online", "offline"), (T.board, "online", "offline")]
+        else:  # diagnostics: while the runtime is up, so "board disconnected" can be shown
+            assert pairs == [(T.status, "online", "offline")] and cfg["entity_category"] == "diagnostic"
+        assert cfg["unique_id"].startswith("cavatar_") and "value_template" in cfg or "payload_on" in cfg
+        assert cfg["device"]["identifiers"] == [f"cavatar_{DEVICE}"] and cfg["origin"]["name"] == "CAvatar Edge"
     assert configs[f"homeassistant/binary_sensor/{DEVICE}_presence/config"]["device_class"] == "occupancy"
+    assert configs[activity]["device_class"] == "enum" and configs[activity]["options"] == ["walking", "squat", "none"]
 
 
 def test_auth_with_user_in_url_and_password_from_environment(make_broker, subscribe, monkeypatch, caplog):

@@ -4,16 +4,20 @@ import json
 import time
 
 from edge.sinks import open_sink
-from edge.sinks.spool import Spool
+from edge.sinks.spool import Spool, min_bytes
 
 from sink_helpers import DEVICE, Gate, body_record, wait_until
+
+
+def line(seq: int) -> str:
+    return json.dumps(body_record(seq))
 
 
 def drain(spool):
     out = []
     while (got := spool.claim()) is not None:
         seg, lines = got
-        out += [int(x) for x in lines]
+        out += [json.loads(x)["seq"] for x in lines]
         spool.remove(seg)
     return out
 
@@ -21,7 +25,7 @@ def drain(spool):
 def test_fifo_in_segments(tmp_path):
     spool = Spool(tmp_path, max_bytes=10**6, segment_records=4)
     for i in range(10):
-        assert spool.append(str(i))
+        assert spool.append(line(i))
     assert len(spool) == 10 and spool.open_records() == 2
     spool.seal()
     assert drain(spool) == list(range(10)) and len(spool) == 0
@@ -29,26 +33,28 @@ def test_fifo_in_segments(tmp_path):
 
 
 def test_bound_drops_the_oldest_and_counts_them(tmp_path):
-    spool = Spool(tmp_path, max_bytes=40 * 3, segment_records=5)  # lines of 3 bytes: 40 fit
-    for i in range(100):
-        spool.append(f"{i:02d}")
+    size = len(line(0)) + 1
+    spool = Spool(tmp_path, max_bytes=min_bytes(5), segment_records=5)
+    fit = min_bytes(5) // size
+    for i in range(3 * fit):
+        spool.append(line(i))
     spool.seal()
     kept = drain(spool)
-    assert spool.dropped == 100 - len(kept) and 30 <= len(kept) <= 40
-    assert kept == list(range(100 - len(kept), 100))  # the newest survive, in order
+    assert spool.dropped == 3 * fit - len(kept) and fit - 10 <= len(kept) <= fit
+    assert kept == list(range(3 * fit - len(kept), 3 * fit))  # the newest survive, in order
 
 
 def test_survives_a_restart_and_skips_a_torn_line(tmp_path):
     spool = Spool(tmp_path, max_bytes=10**6, segment_records=100)
     for i in range(7):
-        spool.append(str(i))
+        spool.append(line(i))
     # the process dies here (no seal, no close); the power cut tore a half line onto the end
     with open(next(tmp_path.glob("*.spool")), "ab") as f:
         f.write(b'{"half')
     again = Spool(tmp_path, max_bytes=10**6)
     assert len(again) == 7
-    again.prepend(["-1"])  # close-time rescue goes first
-    assert drain(again) == [-1] + list(range(7)) and again.torn == 1
+    again.prepend([line(100)])  # close-time rescue goes first
+    assert drain(again) == [100] + list(range(7)) and again.torn == 1
 
 
 def seqs(sub):

@@ -22,7 +22,12 @@ def test_device_topics():
     assert [topic for topic, _ in t.ha_discovery()] == [
         "homeassistant/binary_sensor/carpet-01_presence/config",
         "homeassistant/sensor/carpet-01_people/config",
-        "homeassistant/sensor/carpet-01_activity/config"]
+        "homeassistant/sensor/carpet-01_activity/config",
+        "homeassistant/binary_sensor/carpet-01_board/config",
+        "homeassistant/sensor/carpet-01_fps/config",
+        "homeassistant/binary_sensor/carpet-01_calibration_due/config",
+        "homeassistant/sensor/carpet-01_dropped_frames/config",
+        "homeassistant/sensor/carpet-01_runtime_state/config"]
 
 
 @pytest.mark.parametrize("prefix,device", [("cav+atar", "c1"), ("cavatar/#", "c1"), ("/cavatar", "c1"),

@@ -73,14 +73,23 @@ def test_torn_frame_flag_policy_fills_from_last_frame_and_marks_stale():
     assert asm.counters["torn_flagged"] == 1 and asm.counters["torn_dropped"] == 1
 
 
-def test_missing_frame_end_still_yields_the_frame_when_the_next_begins():
+def test_a_frame_without_its_frame_end_is_never_emitted():
     counts = np.arange(48, dtype=np.uint16).reshape(8, 6)
     asm = FrameAssembler(info())
-    pkts = frame_packets(counts, 1, 0, 1)[:-1]  # no FRAME_END
+    pkts = frame_packets(counts, 1, 0, 1)[:-1]  # no FRAME_END, so no CRC-32 to check the rows against
     assert push_all(asm, pkts) == []
     frames = push_all(asm, frame_packets(counts, 2, 71_000, 1))
-    assert [f.frame_seq for f in frames] == [1, 2]
+    assert [f.frame_seq for f in frames] == [2]
     assert asm.counters["missing_frame_end"] == 1
+
+
+def test_rows_of_two_frames_under_one_number_never_make_a_frame():
+    first, second = np.full((8, 6), 1000, np.uint16), np.full((8, 6), 3000, np.uint16)
+    asm = FrameAssembler(info(), missing_rows="flag", max_missing_rows=4)
+    mixed = frame_packets(first, 1, 0, 1)[:4] + frame_packets(second, 1, 0, 1)[4:8]  # no FRAME_END
+    assert push_all(asm, mixed) == []
+    frames = push_all(asm, frame_packets(second, 2, 71_000, 1))
+    assert [f.frame_seq for f in frames] == [2] and (frames[0].counts == 3000).all()
 
 
 def test_duplicate_and_gap_and_restart():

@@ -26,6 +26,8 @@ def test_quick_set_scores_every_published_record(quick):
     assert scene["status"] == "scored" and scene["frames"] == 70
     line = r["timeline"][scene["name"]]
     assert len(line["true"]) == len(line["published"]) == 70 and set(line["true"]) == {1}
+    (labels,) = line["chunk_activities"]  # 5 s: one simulated scene, one person, its activity named
+    assert len(labels) == 1 and labels[0] in r["by_activity"] and labels[0] != "standing"
     # what the timeline says was published is what the JSON-lines sink holds, frame for frame
     records = [json.loads(x) for x in (out / "work" / f"{scene['name']}.bodies.jsonl").read_text().splitlines()]
     with_people = [len(x["people"]) for x in records if x["people"]]
@@ -43,6 +45,7 @@ def test_quick_set_writes_markdown_and_png(quick):
     _, out = quick
     md = (out / "q.md").read_text()
     assert "| 1 person | 70 |" in md and "](q.png)" in md and "threshold 0.5 m" in md
+    assert "| 1 person: extra-track frames % |" in md and "2 people" not in md  # targets of what was scored only
     assert (out / "q.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -75,9 +78,10 @@ def test_a_scene_that_cannot_start_is_reported_not_fatal(quick, tmp_path, capsys
     (["--set", "quick", "--match-m", "0"], "--match-m must be > 0"),
     (["--set", "quick", "--calibration", "/nonexistent.npz"], "no such file"),
     (["--render", "/nonexistent.json"], "cannot read it"),
+    (["--set", "quick", "--work", "/proc/score-work"], "cannot create /proc/score-work"),
 ])
 def test_bad_input_is_one_line_and_exit_2(argv, says, tmp_path, capsys):
-    assert main(["score", *argv, "--out", str(tmp_path / "x"), "--work", str(tmp_path / "w")]) == 2
+    assert main(["score", "--out", str(tmp_path / "x"), "--work", str(tmp_path / "w"), *argv]) == 2
     err = capsys.readouterr().err
     assert says in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not list(tmp_path.glob("x.*"))

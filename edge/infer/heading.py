@@ -1,0 +1,243 @@
+"""Heading from the feet: resolve the model's 180° ambiguity of global orientation per track.
+
+    resolver = HeadingResolver(HeadingParams.load())         # one per track
+    pose_aa = resolver.resolve(pose_aa, person_kpa, pitch_m)  # (72,) maybe turned 180° about z
+
+The model predicts the body's global orientation well up to a half turn about the vertical: in
+a large share of frames it faces backwards. The pressure itself says which way is forward: a
+foot's blob is elongated along the foot, and its centre of pressure (weighted by kPa) lies
+behind the blob's plain centroid (the heel carries more load than the forefoot), so
+``centroid − CoP`` along the blob's long axis points to the toes.
+
+Per frame, every foot-like blob (area, length and elongation within the parameters, the feet
+carrying most of the person's force) whose offset is clear but not extreme (an extreme one is a
+forefoot or toes carrying the weight) gives a unit vote toward its toes; their sum is the frame's
+cue. Per track, :class:`HeadingResolver` accumulates the cues on the carpet (weighted by how
+reliable the cue is for the activity the model sees) and publishes the model's pose turned by
+Rz(π) when it faces away from them.
+
+Yaw convention: ``yaw(R)`` is the twist about carpet z of R · R0ᵀ, R0 = +90° about x (upright,
+facing −y; design.md), the same twist ``export.metrics.heading_error_rad`` measures. An upright
+body with yaw ψ faces Rz(ψ)·(0, −1, 0).
+
+Parameters live in ``heading.json`` beside this file, fitted offline by ``export/heading_cue.py``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+PARAMS_FILE = Path(__file__).with_name("heading.json")
+
+
+@dataclass(frozen=True)
+class HeadingParams:
+    """Foot-blob gates (physical units) and the track's evidence dynamics."""
+
+    floor_kpa: float = 0.5           # sensels above this form blobs
+    min_area_cm2: float = 40.0       # a foot's contact: at least this …
+    max_area_cm2: float = 400.0      # … and at most this
+    min_length_m: float = 0.10       # long-axis extent (4σ of the sensel spread)
+    max_length_m: float = 0.36
+    min_elongation: float = 1.4      # long σ / short σ
+    min_offset_mm: float = 5.0       # |centroid − CoP| along the long axis: below this no vote (noise) …
+    max_offset_mm: float = 20.0      # … nor above this (a forefoot or a toe carrying the weight: bending, lunge)
+    min_foot_share: float = 0.8      # the foot-like blobs must carry this share of the person's force
+    decay: float = 0.97              # per frame, of the track's summed evidence (a vector on the carpet)
+    max_evidence: float = 30.0       # its length is clipped to this
+    min_evidence: float = 0.5        # shorter evidence decides nothing
+    hold_last: float = 0.0           # 1: without evidence, keep the yaw published last (0: the model's)
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> "HeadingParams":
+        """From a JSON object of these fields (the packaged heading.json by default); ValueError names a bad file."""
+        p = Path(path) if path is not None else PARAMS_FILE
+        try:
+            data = json.loads(p.read_text())
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"{p}: unreadable heading parameters ({exc}); re-run export/heading_cue.py") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{p}: expected a JSON object of heading parameters; re-run export/heading_cue.py")
+        return cls.from_dict(data.get("params", data), where=str(p))
+
+    @classmethod
+    def from_dict(cls, data: dict, where: str = "heading parameters") -> "HeadingParams":
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{where}: unknown field(s) {unknown}; known: {sorted(known)}")
+        try:
+            return cls(**{k: float(v) for k, v in data.items()})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: every field must be a number ({exc})") from None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def load(path: str | Path | None = None, activities: list[str] | None = None) -> tuple[HeadingParams, np.ndarray | None]:
+    """The parameters and, for a bundle's ``activities`` (in its order), the cue's weight per activity
+    from a fitted JSON (the packaged heading.json by default); an activity the file does not name
+    weighs 0 (the cue is not trusted there). ValueError names a bad file."""
+    p = Path(path) if path is not None else PARAMS_FILE
+    params = HeadingParams.load(p)
+    if activities is None:
+        return params, None
+    table = json.loads(p.read_text()).get("activity_weight")
+    if table is None:
+        return params, None
+    try:
+        return params, np.array([float(table.get(a, 0.0)) for a in activities])
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
+
+
+def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, float]:
+    """(H,W) one person's kPa → (K,2) unit forward vectors (x, y) of the K foot-like blobs whose heel
+    offset is clear and plausible, and the share of the person's force all foot-like blobs carry.
+
+    The blobs' moments come from one labelling of the loaded box and one reduceat (no loop over blobs)."""
+    p = np.asarray(pressure_kpa)
+    loaded = p > params.floor_kpa
+    rows, cols = np.flatnonzero(loaded.any(1)), np.flatnonzero(loaded.any(0))
+    if not len(rows):
+        return np.zeros((0, 2)), 0.0
+    box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+    labels, n = ndimage.label(loaded[box])
+    rr, cc = np.nonzero(labels)
+    lab = labels[rr, cc]
+    w = p[box][rr, cc].astype(np.float64)
+    x, y = cc.astype(np.float64), rr.astype(np.float64)  # sensel units in the box, x = column
+    order = np.argsort(lab, kind="stable")  # sums per blob: one reduceat over the blobs' runs
+    starts = np.searchsorted(lab[order], np.arange(1, n + 1))
+    sums = np.add.reduceat(np.stack([np.ones_like(x), x, y, x * x, y * y, x * y, w, w * x, w * y], -1)[order], starts)
+    count, sx, sy, sxx, syy, sxy, force, swx, swy = sums.T
+    mx, my = sx / count, sy / count
+    dof = np.maximum(count - 1, 1)
+    sxx, syy, sxy = (sxx - count * mx * mx) / dof, (syy - count * my * my) / dof, (sxy - count * mx * my) / dof
+    half_gap = np.sqrt(((sxx - syy) / 2) ** 2 + sxy ** 2)
+    major, minor = (sxx + syy) / 2 + half_gap, (sxx + syy) / 2 - half_gap
+    area_cm2 = count * (pitch_m * 100) ** 2
+    length_m = 4 * np.sqrt(np.maximum(major, 0)) * pitch_m
+    foot = ((area_cm2 >= params.min_area_cm2) & (area_cm2 <= params.max_area_cm2) & (minor > 0)
+            & (length_m >= params.min_length_m) & (length_m <= params.max_length_m))
+    foot &= np.sqrt(np.where(foot, major / np.where(minor > 0, minor, 1), 0)) >= params.min_elongation
+    share = float(force[foot].sum() / w.sum())
+    phi = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the major axis
+    axis = np.stack([np.cos(phi), np.sin(phi)], -1)
+    cop = np.stack([swx, swy], -1) / force[:, None]
+    offset_mm = ((np.stack([mx, my], -1) - cop) * axis).sum(-1) * pitch_m * 1e3  # > 0: the toes lie along +axis
+    vote = foot & (np.abs(offset_mm) >= params.min_offset_mm) & (np.abs(offset_mm) <= params.max_offset_mm)
+    return np.sign(offset_mm[vote])[:, None] * axis[vote], share
+
+
+def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> np.ndarray:
+    """(H,W) → (2,) the frame's forward evidence: the feet's votes summed (two feet that disagree
+    cancel); none when anything but feet carries much of the weight (hands, seat, knees)."""
+    v, share = foot_votes(pressure_kpa, pitch_m, params)
+    return v.sum(0) if len(v) and share >= params.min_foot_share else np.zeros(2)
+
+
+def _quaternion(orient_aa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(…,3) axis-angle → (w (…), v (…,3)) of the unit quaternion."""
+    a = np.asarray(orient_aa, np.float64)
+    theta = np.linalg.norm(a, axis=-1)
+    k = np.where(theta > 1e-12, np.sin(theta / 2) / np.where(theta > 1e-12, theta, 1.0), 0.5)
+    return np.cos(theta / 2), a * k[..., None]
+
+
+def yaw_rad(orient_aa: np.ndarray) -> np.ndarray:
+    """(…,3) global orientation (axis-angle) → (…) yaw in (−π, π]: the twist about z of R·R0ᵀ.
+
+    With q = (w, v) the quaternion of R and R0ᵀ = −90° about x, the twist of q ⊗ q(R0ᵀ) about z is
+    2·atan2(v_y + v_z, w + v_x) (the common factor cos 45° cancels)."""
+    w, v = _quaternion(orient_aa)
+    return _wrap(2 * np.arctan2(v[..., 1] + v[..., 2], w + v[..., 0]))
+
+
+def cue_yaw_rad(forward_xy: np.ndarray) -> float:
+    """(2,) a forward vector on the carpet → the yaw of an upright body facing it."""
+    return float(_wrap(np.arctan2(forward_xy[1], forward_xy[0]) + np.pi / 2))
+
+
+def turn_half(pose_aa: np.ndarray) -> np.ndarray:
+    """(…,72) or (…,3) → the same with the global orientation turned 180° about carpet z (Rz(π)·R).
+
+    q(Rz(π)) ⊗ (w, x, y, z) = (−z, −y, x, w); back to axis-angle with w ≥ 0."""
+    out = np.array(pose_aa, np.float32, copy=True)
+    w, v = _quaternion(out[..., 0:3])
+    qw, qv = -v[..., 2], np.stack([-v[..., 1], v[..., 0], w], -1)
+    sign = np.where(qw < 0, -1.0, 1.0)
+    qw, qv = qw * sign, qv * sign[..., None]
+    sin_half = np.linalg.norm(qv, axis=-1)
+    angle = 2 * np.arctan2(sin_half, qw)
+    out[..., 0:3] = qv * np.where(sin_half > 1e-12, angle / np.where(sin_half > 1e-12, sin_half, 1.0), 2.0)[..., None]
+    return out
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+class HeadingResolver:
+    """One track's heading state: where the feet say the person faces, on the carpet.
+
+    The evidence is a vector on the carpet: each frame adds its foot cue (unit votes toward the
+    toes) times the cue's reliability for the activity the model sees (``activity_weight``, 1
+    without one); the sum decays by ``decay`` per frame and its length is clipped to
+    ``max_evidence``, so a turn is followed within a few frames and one odd frame does not decide.
+    While the evidence is at least ``min_evidence`` long, a pose whose yaw is more than 90° from
+    it is published turned by Rz(π); the model's yaw (which may drift or swing on its own) keeps
+    all its precision otherwise. Without enough evidence the model's answer is published, or,
+    with ``hold_last`` = 1, the half turn nearest to the yaw published last (no 180° jumps).
+    """
+
+    def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None) -> None:
+        self.params = params or HeadingParams()
+        self.activity_weight = None if activity_weight is None else np.asarray(activity_weight, np.float64)
+        self.evidence = np.zeros(2)
+        self.last_yaw: float | None = None
+        self.flips = 0  # frames published turned
+
+    def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
+                activity_probs: np.ndarray | None = None) -> np.ndarray:
+        """(72,) the model's pose, (H,W) the person's kPa (as the model saw it), (A,) the model's
+        activity probabilities → (72,) the pose to publish."""
+        return self.decide(pose_aa, frame_cue(person_kpa, pitch_m, self.params), activity_probs)
+
+    def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`resolve` with the frame's cue (2,) already computed."""
+        p = self.params
+        weight = 1.0
+        if self.activity_weight is not None and activity_probs is not None:
+            weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
+        e = self.evidence * p.decay + weight * np.asarray(cue, np.float64)
+        length = float(np.hypot(e[0], e[1]))
+        if length > p.max_evidence:
+            e, length = e * (p.max_evidence / length), p.max_evidence
+        self.evidence = e
+        yaw = float(yaw_rad(np.asarray(pose_aa[:3])))
+        ref = cue_yaw_rad(e) if length >= p.min_evidence else (self.last_yaw if p.hold_last else None)
+        out = np.asarray(pose_aa)
+        if ref is not None and abs(_wrap(yaw - ref)) > np.pi / 2:
+            out, yaw = turn_half(out), float(_wrap(yaw + np.pi))
+            self.flips += 1
+        self.last_yaw = yaw
+        return out
+
+
+def resolve_sequence(pose_aa: np.ndarray, cues: np.ndarray, activity_probs: np.ndarray | None,
+                     params: HeadingParams, activity_weight: np.ndarray | None = None) -> np.ndarray:
+    """(L,72) one track's poses frame by frame, (L,2) their frame cues (:func:`frame_cue`), (L,A) activity
+    probabilities or None → (L,72) what a fresh resolver publishes (offline evaluation and fitting)."""
+    r = HeadingResolver(params, activity_weight)
+    probs = [None] * len(pose_aa) if activity_probs is None else activity_probs
+    return np.stack([r.decide(pose_aa[t], cues[t], probs[t]) for t in range(len(pose_aa))]).astype(np.float32)
+
+
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]

@@ -1,0 +1,97 @@
+"""Soft-tissue stiffness by region: the compliant layer under the body is not one material.
+
+``regional_tissue(model)`` starts from the per-joint blend (``mesh.tissue_stiffness``) and
+overrides regions found on the body model's template (canonical Y up, facing +Z), as
+vertex weights that fade smoothly (the lite mesh has 3–5 cm edges):
+
+- foot, along its length from the heel (``FOOT_ZONES``): a stiff heel pad (thin, dense
+  fat under the calcaneus), a medial arch that barely loads and a lateral midfoot band
+  that does, stiff metatarsal heads, softer toes;
+- the ischial tuberosities (the sitting bones: ~39 mm of tissue under them, the rest of
+  the buttock thick and soft), the sacrum and the scapulae (bony prominences that carry
+  the supine body);
+- everything else keeps its part's value.
+
+Stiffness is kPa per mm of indentation of tissue and rug in series (Winkler layer); the
+contact model interpolates its inverse (compliance) across a triangle, so a soft vertex
+stays soft between stiff neighbours.
+Values were fitted so that the audit's plantar, sitting and lying checks land in their
+published ranges (see docs/sim-contact.md and ``cavatar sim audit``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sim.contact.mesh import TISSUE_KPA_PER_MM, tissue_stiffness
+
+# Foot zones by fraction of the foot's length from the heel: (start, end, kPa/mm medial, kPa/mm lateral).
+FOOT_ZONES = (
+    (0.00, 0.24, 11.0, 11.0),  # heel pad
+    (0.24, 0.68, 0.05, 0.3),   # midfoot: medial longitudinal arch, lateral band
+    (0.68, 0.88, 8.0, 8.0),    # metatarsal heads
+    (0.88, 1.01, 3.0, 3.0),    # toes
+)
+# Bony prominences: centre in the template relative to a joint (m), Gaussian radius (m), kPa/mm.
+PROMINENCES = {
+    "ischial_tuberosity": (("left_hip", (-0.055, -0.105, -0.08)), ("right_hip", (0.055, -0.105, -0.08)), 0.04, 4.0),
+    "sacrum": (("pelvis", (0.0, 0.03, -0.11)), None, 0.045, 1.6),
+    "scapula": (("spine3", (0.09, 0.03, -0.06)), ("spine3", (-0.09, 0.03, -0.06)), 0.05, 1.6),
+}
+BUTTOCK_KPA_PER_MM = 0.5  # gluteal soft tissue away from the bones (was 0.2: the floor-sitting body sank 63 mm)
+
+
+def _joints(model) -> np.ndarray:
+    a = model.arrays
+    return np.asarray(a.J_regressor) @ np.asarray(a.v_template)
+
+
+def foot_fraction(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per foot vertex: (mask (V,) any foot, fraction of the foot's length from the heel (V,),
+    medial (V,) bool) on the template."""
+    v = np.asarray(model.arrays.v_template, np.float64)
+    j = _joints(model)
+    names = list(model.joint_names)
+    dominant = np.argmax(np.asarray(model.arrays.weights), axis=1)
+    frac = np.full(len(v), np.nan)
+    medial = np.zeros(len(v), bool)
+    mask = np.zeros(len(v), bool)
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        ankle, ball = j[names.index(f"{side}_ankle")], j[names.index(f"{side}_foot")]
+        on = np.isin(dominant, [names.index(f"{side}_ankle"), names.index(f"{side}_foot")])
+        u = ball - ankle
+        u[1] = 0.0
+        u /= np.linalg.norm(u)
+        proj = (v[on] - ball) @ u
+        frac[on] = (proj - proj.min()) / (proj.max() - proj.min())
+        # medial: toward the body's midline from the line heel → ball (x < ball's x on the left foot)
+        side_dir = np.cross(np.array([0.0, 1.0, 0.0]), u)  # horizontal, perpendicular to the axis
+        lateral = ((v[on] - ball) @ side_dir) * sign * np.sign(side_dir[0] or 1.0)
+        medial[on] = lateral < 0.0
+        mask |= on
+    return mask, frac, medial
+
+
+def regional_tissue(model, table: dict[str, float] | None = None) -> np.ndarray:
+    """Per-vertex stiffness (V,) kPa/mm with the regions of the module docstring."""
+    base_table = dict(TISSUE_KPA_PER_MM if table is None else table)
+    for name in ("pelvis",):
+        base_table[name] = BUTTOCK_KPA_PER_MM
+    k = tissue_stiffness(model, base_table)
+    v = np.asarray(model.arrays.v_template, np.float64)
+    names = list(model.joint_names)
+    j = _joints(model)
+    mask, frac, medial = foot_fraction(model)
+    for lo, hi, k_med, k_lat in FOOT_ZONES:
+        zone = mask & (frac >= lo) & (frac < hi)
+        k[zone] = np.where(medial[zone], k_med, k_lat)
+    for first, second, radius, stiff in PROMINENCES.values():
+        w = np.zeros(len(v))
+        for spec in (first, second):
+            if spec is None:
+                continue
+            centre = j[names.index(spec[0])] + np.asarray(spec[1])
+            w = np.maximum(w, np.exp(-0.5 * np.sum((v - centre) ** 2, 1) / radius ** 2))
+        w[mask] = 0.0
+        k = k + w * np.maximum(stiff - k, 0.0)  # prominences only ever stiffen
+    return k

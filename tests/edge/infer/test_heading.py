@@ -1,0 +1,130 @@
+"""edge.infer.heading: the foot-shape cue, the yaw convention, the half turn and the per-track resolver."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from edge.infer import heading
+from edge.infer.heading import HeadingParams, HeadingResolver, cue_yaw_rad, frame_cue, turn_half, yaw_rad
+
+PITCH = 0.01905
+R0 = Rotation.from_rotvec([np.pi / 2, 0, 0])  # upright, facing −y
+
+
+def upright(yaw: float) -> np.ndarray:
+    """(72,) a pose: upright, yaw ``yaw``, some local pose that must survive untouched."""
+    pose = np.linspace(-0.3, 0.3, 72).astype(np.float32)
+    pose[:3] = (Rotation.from_rotvec([0, 0, yaw]) * R0).as_rotvec()
+    return pose
+
+
+def feet(toes: str, heel_kpa: float = 10.0, toe_kpa: float = 6.0) -> np.ndarray:
+    """(96,96) two parallel feet 13 sensels long (25 cm), 5 wide, heel-heavy (CoP 11 mm behind the centroid), toes toward −y ("up") or +y ("down")."""
+    p = np.zeros((96, 96), np.float32)
+    ramp = np.linspace(toe_kpa, heel_kpa, 13)[:, None]  # row 0 of the foot is its toe
+    if toes == "down":
+        ramp = ramp[::-1]
+    for c0 in (40, 50):
+        p[40:53, c0:c0 + 5] = ramp
+    return p
+
+
+def test_yaw_of_an_upright_body_and_the_half_turn():
+    for yaw in (0.0, 0.7, -2.0, 3.0):
+        pose = upright(yaw)
+        assert yaw_rad(pose[:3]) == pytest.approx(yaw, abs=1e-6)
+        turned = turn_half(pose)
+        assert abs(((yaw_rad(turned[:3]) - yaw - np.pi) + np.pi) % (2 * np.pi) - np.pi) < 1e-5
+        np.testing.assert_array_equal(turned[3:], pose[3:])  # the local pose is not touched
+        # still upright: the body's up (canonical +y) stays carpet +z
+        up = Rotation.from_rotvec(turned[:3]).apply([0, 1, 0])
+        np.testing.assert_allclose(up, [0, 0, 1], atol=1e-6)
+    assert cue_yaw_rad(np.array([0.0, -1.0])) == pytest.approx(0.0)  # facing −y is yaw 0
+    assert cue_yaw_rad(np.array([1.0, 0.0])) == pytest.approx(np.pi / 2)
+
+
+def test_heel_heavy_feet_point_to_their_toes():
+    params = HeadingParams()
+    up = frame_cue(feet("up"), PITCH, params)
+    down = frame_cue(feet("down"), PITCH, params)
+    assert up[1] < 0 and abs(up[0]) < 1e-6 * abs(up[1]) + 1e-9
+    np.testing.assert_allclose(down, -up, atol=1e-9)
+    # no cue: uniform blobs (no heel), a round blob, or a seat carrying most of the weight
+    flat = feet("up", 8.0, 8.0)
+    assert not frame_cue(flat, PITCH, params).any()
+    round_blob = np.zeros((96, 96), np.float32)
+    round_blob[40:48, 40:48] = np.linspace(4, 12, 8)[:, None]
+    assert not frame_cue(round_blob, PITCH, params).any()
+    # an extreme offset (22 mm: a forefoot or toes carrying the weight, as in bending) is not a vote
+    assert not frame_cue(feet("up", 12.0, 4.0), PITCH, params).any()
+    seat = feet("up")
+    seat[60:80, 30:60] = 10.0
+    assert not frame_cue(seat, PITCH, params).any()
+
+
+def test_the_resolver_turns_a_backwards_body_and_keeps_a_right_one():
+    params = HeadingParams(decay=0.9, max_evidence=5.0, min_evidence=0.3)
+    right, wrong = HeadingResolver(params), HeadingResolver(params)
+    for t in range(10):
+        out_right = right.resolve(upright(0.1), feet("up"), PITCH)
+        out_wrong = wrong.resolve(upright(0.1 + np.pi), feet("up"), PITCH)
+    assert yaw_rad(out_right[:3]) == pytest.approx(0.1, abs=1e-5) and right.flips == 0
+    assert yaw_rad(out_wrong[:3]) == pytest.approx(0.1, abs=1e-5) and wrong.flips >= 9
+    # the model changes its mind (its yaw jumps 180°) while the feet go quiet: the published yaw stays put
+    out = wrong.decide(upright(0.1), np.zeros(2))
+    assert yaw_rad(out[:3]) == pytest.approx(0.1, abs=1e-5)
+    # and with no cue ever, the model's own answer is published
+    fresh = HeadingResolver(params)
+    assert yaw_rad(fresh.decide(upright(2.5), np.zeros(2))[:3]) == pytest.approx(2.5, abs=1e-5)
+
+
+def test_without_evidence_hold_last_keeps_the_published_half_turn():
+    for hold, expect in ((1.0, 0.1), (0.0, 0.1 + np.pi)):
+        r = HeadingResolver(HeadingParams(decay=0.5, max_evidence=5.0, min_evidence=0.5, hold_last=hold))
+        for _ in range(5):
+            r.resolve(upright(0.1), feet("up"), PITCH)
+        for _ in range(10):  # the feet go quiet, the evidence fades, the model keeps its answer
+            out = r.decide(upright(0.1), np.zeros(2))
+        out = r.decide(upright(0.1 + np.pi), np.zeros(2))  # … then swings round
+        assert abs(((yaw_rad(out[:3]) - expect) + np.pi) % (2 * np.pi) - np.pi) < 1e-5
+
+
+def test_a_turning_person_is_followed():
+    r = HeadingResolver(HeadingParams(decay=0.8, max_evidence=5.0, min_evidence=0.5))
+    rot = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90° on the carpet
+    for _ in range(10):
+        r.resolve(upright(0.0), feet("up"), PITCH)
+    for _ in range(15):  # now facing yaw +90°: feet toward +x; the model says so too, then backwards
+        r.decide(upright(np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
+    out = r.decide(upright(-np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
+    assert yaw_rad(out[:3]) == pytest.approx(np.pi / 2, abs=1e-5)
+
+
+def test_activity_weights_silence_the_cue_where_it_is_not_trusted():
+    params = HeadingParams(min_evidence=0.3)
+    weights = np.array([1.0, 0.0])
+    r = HeadingResolver(params, weights)
+    for _ in range(10):
+        out = r.resolve(upright(np.pi), feet("up"), PITCH, np.array([0.0, 1.0]))  # an untrusted activity
+    assert r.flips == 0 and abs(yaw_rad(out[:3])) > np.pi - 1e-4  # published as the model said
+    out = r.resolve(upright(np.pi), feet("up"), PITCH, np.array([1.0, 0.0]))
+    assert r.flips == 1 and yaw_rad(out[:3]) == pytest.approx(0.0, abs=1e-5)
+
+
+def test_the_packaged_parameters_load_and_bad_files_are_one_clear_error(tmp_path):
+    params, weights = heading.load(activities=["standing", "no-such-activity"])
+    assert isinstance(params, HeadingParams) and weights.shape == (2,) and weights[1] == 0.0 and weights[0] > 0.5
+    bad = tmp_path / "h.json"
+    bad.write_text("{nope")
+    with pytest.raises(ValueError, match="unreadable heading parameters"):
+        HeadingParams.load(bad)
+    bad.write_text(json.dumps({"params": {"decay": 0.9, "colour": 1}}))
+    with pytest.raises(ValueError, match="unknown field"):
+        HeadingParams.load(bad)
+    bad.write_text(json.dumps({"params": {"decay": "fast"}}))
+    with pytest.raises(ValueError, match="must be a number"):
+        HeadingParams.load(bad)

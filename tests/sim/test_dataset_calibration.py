@@ -1,0 +1,65 @@
+"""Datasets with each carpet's calibration, and the board's path (counts → calibration → kPa) for training."""
+
+import hashlib
+
+import numpy as np
+import pytest
+
+from export.data import load_tracks
+from sim.dataset import Dataset
+from sim.dataset.generate import generate
+
+
+@pytest.fixture(scope="module")
+def calibrated(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cal") / "a"
+    generate(out, subjects=1, seconds_per_activity=2.0, people=(1, 1), seed=2, activities=("squat",), progress=False,
+             calibration="truth")
+    return out
+
+
+def test_every_shard_names_a_carpet_whose_calibration_is_in_the_dataset(calibrated):
+    ds = Dataset(calibrated)
+    cals = ds.manifest["calibrations"]
+    assert ds.manifest["settings"]["calibration"] == "truth"
+    for info in ds.manifest["shards"]:
+        entry = cals[str(info["carpet"])]
+        assert entry["method"] == "truth" and (calibrated / entry["file"]).exists()
+
+
+def test_board_path_reads_the_load_the_true_pressure_holds(calibrated):
+    board = load_tracks(calibrated, "test", board=True) + load_tracks(calibrated, "train", board=True)
+    truth = load_tracks(calibrated, "test") + load_tracks(calibrated, "train")
+    assert len(board) == len(truth) > 0
+    for b, t in zip(board, truth):
+        np.testing.assert_array_equal(b.pose_aa, t.pose_aa)  # same ground truth
+        pb, pt = b.pressure_kpa.astype(np.float32), t.pressure_kpa.astype(np.float32)
+        assert not np.array_equal(pb, pt)  # the sensor is in the loop
+        loaded = pt > 2.0
+        # where the true pressure is well inside the sensor's range, the board reads it within a few kPa
+        mid = loaded & (pt < 10.0)
+        assert np.median(np.abs(pb[mid] - pt[mid])) < 2.0
+        assert (pb[~(pt > 0.05)] > 1.0).mean() < 0.01  # and reads (almost) nothing where nobody stands
+
+
+def test_board_path_without_calibrations_says_how_to_make_them(tmp_path):
+    out = generate(tmp_path / "b", subjects=1, seconds_per_activity=1.0, people=(1, 1), seed=3, activities=("squat",),
+                   progress=False)
+    with pytest.raises(ValueError, match="--calibration installer"):
+        load_tracks(out, "test", board=True)
+
+
+def test_calibration_files_are_the_same_bytes_for_a_seed(calibrated, tmp_path):
+    again = generate(tmp_path / "c", subjects=1, seconds_per_activity=2.0, people=(1, 1), seed=2, activities=("squat",),
+                     progress=False, calibration="truth")
+    for entry in Dataset(calibrated).manifest["calibrations"].values():
+        a = hashlib.sha256((calibrated / entry["file"]).read_bytes()).hexdigest()
+        b = hashlib.sha256((again / entry["file"]).read_bytes()).hexdigest()
+        assert a == b
+
+
+def test_unknown_calibration_method_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="installer"):
+        generate(tmp_path / "d", subjects=1, seconds_per_activity=1.0, activities=("squat",), progress=False,
+                 calibration="guess")
+    assert not (tmp_path / "d" / "manifest.json").exists()
