@@ -95,3 +95,32 @@ def test_lying_down_on_purpose_raises_nothing(body):
 
     _, ev = _events("lie_down", body, replace(FallConfig(), person_down_s=3.0), lie_s=6.0)
     assert ev == []
+
+
+def test_objects_press_with_their_weight_and_a_pet_lies_down_now_and_then():
+    from sim.objects import G_M_S2, DroppedBag, Pet
+
+    rng = np.random.default_rng(0)
+    pitch, n = 0.01905, 96
+    bag = DroppedBag.random(rng, drop_s=2.0)
+    assert bag.pressure_kpa(1.0, n, n, pitch).sum() == 0  # not dropped yet
+    force = bag.pressure_kpa(3.0, n, n, pitch).sum() * 1000 * pitch * pitch
+    assert abs(force - bag.mass_kg * G_M_S2) < 1e-3 * bag.mass_kg * G_M_S2
+    pet = Pet.random(rng, seconds=120.0)
+    assert 5 <= pet.mass_kg <= 30 and pet.lie_spans_s
+    a, _ = pet.lie_spans_s[0]
+    for t in (0.1, 0.37, a + 0.1):
+        p = pet.pressure_kpa(t, n, n, pitch)
+        assert abs(p.sum() * 1000 * pitch * pitch - pet.mass_kg * G_M_S2) < 0.01 * pet.mass_kg * G_M_S2
+    standing = (pet.pressure_kpa(0.1, n, n, pitch) > 0).sum()
+    lying = (pet.pressure_kpa(a + 0.1, n, n, pitch) > 0).sum()
+    assert lying > 3 * standing  # four paws, then the body's outline
+
+
+def test_sim_url_takes_fall_scenarios_and_names_the_known_ones():
+    from edge.sources.sim import open_link
+
+    assert open_link("sim://?activities=fall_forward,lie_down,squat&speed=0").opts["activities"] == (
+        "fall_forward", "lie_down", "squat")
+    with pytest.raises(ValueError, match="known: .*slow_collapse"):
+        open_link("sim://?activities=tumbling")
