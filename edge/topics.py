@@ -28,6 +28,7 @@ HA_PREFIX = "homeassistant"
 ONLINE = "online"
 OFFLINE = "offline"
 PRESENCE_SCHEMA = "cavatar.presence/1"
+EVENTS_SCHEMA = "cavatar.events/1"  # fall / person-down events (edge.runtime.events)
 INFO_SCHEMA = "cavatar.info/1"
 NO_ACTIVITY = "none"
 
@@ -60,6 +61,12 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec("<prefix>/<device>/board", '"online" | "offline" (plain text)', "1", True,
               "Board availability: \"online\" while frames arrive, \"offline\" after [source] board_timeout_s "
               "without a good frame (unplugged, hung, bad CRCs) and on a clean stop."),
+    TopicSpec("<prefix>/<device>/events", "JSON, schema cavatar.events/1", "URL ?qos= (at least 1)", False,
+              "Fall and person-down events, raised and cleared (docs/falls.md); spooled while the broker is away."),
+    TopicSpec("homeassistant/binary_sensor/<device>_person_down/config", "JSON, Home Assistant discovery", "1", True,
+              "Person-down binary sensor from the events topic; availability = status topic."),
+    TopicSpec("homeassistant/event/<device>_fall/config", "JSON, Home Assistant discovery", "1", True,
+              "Fall event entity from the events topic; availability = status topic."),
     TopicSpec("homeassistant/binary_sensor/<device>_presence/config", "JSON, Home Assistant discovery", "1", True,
               "Occupancy binary sensor from presence.present; available while status and board are online."),
     TopicSpec("homeassistant/sensor/<device>_people/config", "JSON, Home Assistant discovery", "1", True,
@@ -132,6 +139,10 @@ class DeviceTopics:
     @property
     def board(self) -> str:
         return f"{self.base}/board"
+
+    @property
+    def events(self) -> str:
+        return f"{self.base}/events"
 
     @property
     def all(self) -> str:

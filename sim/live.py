@@ -47,11 +47,14 @@ def place_chunk(subjects, activities, seed: int, chunk: int, seconds: float, rat
     with several people), placed on a ``size_m`` carpet; other activities are drawn when they do not fit."""
     from sim.dataset.generate import place_scene
     from sim.motion import scene
+    from sim.motion.falls import SCENARIOS, scenario_scene
 
     rng = np.random.default_rng((seed, chunk))
-    pool = [a for a in activities if len(subjects) < 2 or a not in LYING]
+    pool = [a for a in activities if len(subjects) < 2 or (a not in LYING and a not in SCENARIOS)]
     for attempt in range(6):  # activities that do not fit together: draw others
         acts = [[str(rng.choice(pool))] for _ in subjects]
+        if acts[0][0] in SCENARIOS:  # a fall or a look-alike (sim.motion.falls): one person
+            return scenario_scene(subjects[0], acts[0][0], seconds, rate_hz, size_m, (seed, chunk, attempt), body)
         try:
             return place_scene(scene, subjects, acts, seconds, rate_hz, size_m, (seed, chunk, attempt), body, attempts=2)
         except ValueError:

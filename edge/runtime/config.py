@@ -28,6 +28,7 @@ from typing import Any, Callable, NamedTuple
 
 from calibration.runtime import BaselineConfig
 from edge.scene import SceneConfig
+from edge.scene.falls import FallConfig
 
 SHIPPED_BUNDLE = "lean-96"
 DEFAULT_OUTPUT_DIR = "out/cavatar"
@@ -220,6 +221,7 @@ SECTIONS: dict[str, type] = {
     "scene": SceneConfig,
     "sinks": SinksSection,
     "runtime": RuntimeSection,
+    "events": FallConfig,
 }
 DELEGATED = {"scene": SceneConfig, "calibration.baseline": BaselineConfig}  # typed configs owned elsewhere
 
@@ -235,6 +237,7 @@ class RuntimeConfig:
     scene: SceneConfig = field(default_factory=SceneConfig)
     sinks: SinksSection = field(default_factory=SinksSection)
     runtime: RuntimeSection = field(default_factory=RuntimeSection)
+    events: FallConfig = field(default_factory=FallConfig)
 
     @classmethod
     def from_dict(cls, values: Any, source: str = "configuration") -> "RuntimeConfig":

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-STAGES = ("decode", "calibrate", "scene", "encoder", "head", "body", "frame", "publish", "lag")
+STAGES = ("decode", "calibrate", "scene", "encoder", "head", "body", "frame", "events", "publish", "lag")
 
 
 class StageTimes:

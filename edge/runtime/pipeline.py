@@ -65,6 +65,7 @@ class Runtime:
         self.chosen: ChosenCalibration | None = (
             ChosenCalibration(calibration, Path(getattr(calibration, "path", "(given)")), False) if calibration is not None else None)
         self.stages: FrameStages | None = None
+        self.events: Any = None  # edge.runtime.events.EventStage when [events] enabled
         self.publisher: Publisher | None = None
         self.seqs: Any = None  # edge.runtime.seq.SeqLedger while set up
         self._seq_start = 0
@@ -166,6 +167,11 @@ class Runtime:
             raise
         self.publisher = Publisher(self.sinks, counters=self.counters, times=self.times,
                                    queue_records=cfg.sinks.queue_records, clock=self.clock)
+        if cfg.events.enabled:
+            from edge.runtime.events import EventStage
+
+            self.events = EventStage(cfg.events, cfg.device.id, self.chosen.calibration.pitch_m, self.times,
+                                     clock=self.clock)
         self.state = "ready"
 
     def _open_sinks(self) -> list:
@@ -268,7 +274,7 @@ class Runtime:
     def _pipeline_loop(self) -> None:
         from calibration.runtime import status_temperature_c
 
-        src, stages, pub = self.source, self.stages, self.publisher
+        src, stages, pub, events = self.source, self.stages, self.publisher, self.events
         seconds = self.config.runtime.seconds
         deadline = self._started_mono + seconds if seconds > 0 else None
         last_status = None
@@ -298,6 +304,9 @@ class Runtime:
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
+                    if events is not None:
+                        for payload in events.frame(out, stages.scene_frame, frame.host_time_s):
+                            pub.put_event(payload)
                         for callback in self.on_outcome:
                             callback(out)
                     if self._limit_reached() or (deadline is not None and time.monotonic() >= deadline):
@@ -308,6 +317,9 @@ class Runtime:
                 if deadline is not None and time.monotonic() >= deadline:
                     self.end_reason = f"ran {seconds:g} s"
                     break
+                if not got and events is not None:  # no frame: a lost board clears its events
+                    for payload in events.idle():
+                        pub.put_event(payload)
                 if not got and getattr(src, "ended", False):
                     self.end_reason = "the source ended"
                     break
@@ -315,6 +327,9 @@ class Runtime:
             self.error = f"{type(exc).__name__}: {exc}"
             log.error("source %s failed: %s", self.config.source.url, exc)
         finally:
+            if events is not None:
+                for payload in events.close():
+                    pub.put_event(payload)
             if self.end_reason is None:
                 self.end_reason = "failed" if self.error else ("frame limit" if self._limit_reached() else "stop requested")
             self._ended.set()

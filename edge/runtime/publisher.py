@@ -53,6 +53,7 @@ class _SinkWorker:
         self.pub, self.sink = publisher, sink
         self.cond = threading.Condition()
         self.records: deque[_Entry] = deque()
+        self.events: deque[dict] = deque()  # fall / person-down events: rare, never dropped
         self.info: dict | None = None
         self.presence: tuple[int, tuple[str, ...]] | None = None
         self.closing = False
@@ -70,6 +71,11 @@ class _SinkWorker:
             self.records.append(entry)
             self.cond.notify()
         return old
+
+    def put_event(self, payload: dict) -> None:
+        with self.cond:
+            self.events.append(payload)
+            self.cond.notify()
 
     def set_slot(self, name: str, value: Any) -> None:
         with self.cond:
@@ -97,18 +103,22 @@ class _SinkWorker:
         try:
             while True:
                 with self.cond:
-                    while not (self.records or self.info is not None or self.presence is not None or self.closing):
+                    while not (self.records or self.events or self.info is not None or self.presence is not None
+                               or self.closing):
                         self.cond.wait(0.25)
                     entry = self.records.popleft() if self.records else None
+                    event = self.events.popleft() if self.events else None
                     info, self.info = self.info, None
                     presence, self.presence = self.presence, None
-                    if entry is None and info is None and presence is None:
+                    if entry is None and event is None and info is None and presence is None:
                         break  # closing and drained
                 if entry is not None:
                     t0 = time.perf_counter()
                     self.call("publish_bodies", entry.record)
                     pub.times.add("publish", (time.perf_counter() - t0) * 1e3)
                     pub._handled(entry)
+                if event is not None:
+                    self.call("publish_event", event)
                 if info is not None:
                     self.call("publish_info", info)
                 if presence is not None:
@@ -161,6 +171,12 @@ class Publisher:
                 with self._lock:
                     old.lost = True
                 self._handled(old, publish=False)
+
+    def put_event(self, payload: dict) -> None:
+        """Queue one ``cavatar.events/1`` payload for every sink (publish_event); never dropped."""
+        self.counters.add("events_published")
+        for worker in self._workers:
+            worker.put_event(payload)
 
     def put_info(self, info: dict) -> None:
         self.counters.add("info_published")

@@ -83,11 +83,13 @@ class FrameStages:
         self._last_heartbeat_t: float | None = None
         self._was_people = True  # so the first empty frame sends a heartbeat at once
         self._advice_said: set[str] = set()
+        self.scene_frame: Any = None  # the last frame's SceneFrame (the fall events read it)
 
     # ------------------------------------------------------------------ the step
     def process(self, frame: RawFrame, temperature_c: float | None = None) -> FrameOutcome:
         c, times = self.counters, self.times
         c.add("frames_in")
+        self.scene_frame = None
         t0 = time.perf_counter()
         cal = self.calibrated.process(frame.counts, frame.t_s, temperature_c)
         t1 = time.perf_counter()
@@ -97,6 +99,7 @@ class FrameStages:
             return self._refused(frame, f"calibration_{cal.rejected}")
         masked = cal.masked if cal.masked.any() else None
         sf = self.scene.update(cal.pressure_kpa, frame.t_s, masks=masked)
+        self.scene_frame = sf
         t2 = time.perf_counter()
         times.add("scene", (t2 - t1) * 1e3)
         if not sf.valid:

@@ -23,6 +23,7 @@ from collections import deque
 from typing import Any, Mapping, Sequence
 
 from edge.record import RecordError, check_record, check_telemetry, dumps
+from edge.topics import EVENTS_SCHEMA
 from edge.urls import Option, parse_bool, parse_url
 
 __all__ = ["Sink", "SinkError", "Counters", "Option", "parse_bool", "parse_sink_url"]
@@ -101,6 +102,20 @@ class Sink(ABC):
             raise
         self._write_info(dict(info))
 
+    def publish_event(self, payload: Mapping) -> None:
+        """One ``cavatar.events/1`` payload (a fall or person-down event raised or cleared); checked like info."""
+        try:
+            check_telemetry(dict(payload), "event")
+            if payload.get("schema") != EVENTS_SCHEMA or payload.get("device") != self.device:
+                raise RecordError(f"not a cavatar.events/1 payload of device {self.device!r}")
+            line = dumps(dict(payload))
+        except RecordError:
+            self.counters.add("refused")
+            raise
+        if self.closed:
+            raise SinkError(f"{self.scheme}:// sink is closed")
+        self._write_event(dict(payload), line)
+
     def publish_status(self, online: bool) -> None:
         """Availability: True → "online", False → "offline" (close() publishes "offline" itself)."""
 
@@ -123,6 +138,9 @@ class Sink(ABC):
     def _write_bodies(self, record: Mapping, line: str, t_call: float) -> None: ...
 
     def _write_info(self, info: dict) -> None:
+        pass
+
+    def _write_event(self, payload: dict, line: str) -> None:
         pass
 
     def _gauges(self) -> dict[str, Any]:

@@ -294,6 +294,29 @@ class JsonlSink(Sink):
             raise
         self._size = before + len(data)
 
+    @property
+    def events_path(self) -> Path | None:
+        """Fall / person-down events go here, one JSON line each (stdout with the bodies for jsonl:-)."""
+        return None if self.path is None else self.path.with_name(f"{self.path.stem}.events.jsonl")
+
+    def _write_event(self, payload: dict, line: str) -> None:
+        data = line.encode() + b"\n"
+        try:
+            if self.path is None:
+                with self._lock:
+                    sys.stdout.write(data.decode())
+                    sys.stdout.flush()
+                return
+            fd = os.open(self.events_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+            try:
+                os.write(fd, data)  # one short line: a single append
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except (OSError, ValueError) as exc:
+            self.counters.add("errors")
+            log.error("jsonl:// %s: event not written: %s", self.describe(), exc)
+
     def _write_info(self, info: dict) -> None:
         if self.path is None:
             return

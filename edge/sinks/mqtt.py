@@ -405,6 +405,24 @@ class MqttSink(Sink):
         info = self._client.publish(self.topics.bodies, line, self.config.qos)
         self._after_publish(info, _Pending("bodies", t_call, self.config.qos))
 
+    def _write_event(self, payload: dict, line: str) -> None:
+        """Events go to the events topic at QoS ≥ 1, through the spool (in order with the bodies) while the
+        broker is away; the spool's drain sends each line to its topic by schema."""
+        qos = max(1, self.config.qos)
+        if self._spool is not None:
+            with self._route:
+                if self._spooling or not self._connected:
+                    self._to_spool(line)
+                    return
+        info = self._client.publish(self.topics.events, line, qos)
+        self._after_publish(info, _Pending("event", time.monotonic(), qos))
+
+    def _line_topic(self, line: bytes) -> tuple[str, int]:
+        """A spooled line's topic and QoS: events by their schema, everything else is bodies."""
+        if line.startswith(b'{"schema":"cavatar.events/'):
+            return self.topics.events, max(1, self.config.qos)
+        return self.topics.bodies, self.config.qos
+
     def _to_spool(self, line: str) -> None:
         """Under self._route."""
         self._spooling = True
@@ -497,10 +515,11 @@ class MqttSink(Sink):
                     self._acks.wait(0.05)
             if not self._connected or self._stop.is_set():
                 return False
-            info = self._client.publish(self.topics.bodies, lines[i], self.config.qos)
+            topic, qos = self._line_topic(lines[i])
+            info = self._client.publish(topic, lines[i], qos)
             if info.rc == self._m.MQTT_ERR_QUEUE_SIZE:
                 return False
-            self._after_publish(info, _Pending("spool", time.monotonic(), self.config.qos, None, seg, i))
+            self._after_publish(info, _Pending("spool", time.monotonic(), qos, None, seg, i))
             sent += 1
             if info.rc != self._m.MQTT_ERR_SUCCESS:
                 return False
@@ -547,7 +566,11 @@ class MqttSink(Sink):
         self._wake.set()
 
     def _send_discovery(self) -> None:
-        for topic, payload in self.topics.ha_discovery(sw_version=__version__, activities=self._activities):
+        from edge.runtime.events import ha_event_discovery
+
+        configs = self.topics.ha_discovery(sw_version=__version__, activities=self._activities)
+        configs += ha_event_discovery(self.topics, configs[0][1]["device"], configs[0][1].get("origin"))
+        for topic, payload in configs:
             self._send(topic, dumps(payload), 1, True, "discovery")
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:

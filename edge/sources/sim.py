@@ -55,6 +55,17 @@ def _positive_s(text: str) -> float:
     return value
 
 
+def _activities(text: str) -> tuple[str, ...]:
+    from sim.motion import ACTIVITIES
+    from sim.motion.falls import SCENARIOS
+
+    names = tuple(a.strip() for a in text.split(",") if a.strip())
+    unknown = [a for a in names if a not in ACTIVITIES and a not in SCENARIOS]
+    if unknown or not names:
+        raise ValueError(f"activities: unknown {unknown or text!r}; known: {', '.join(ACTIVITIES + SCENARIOS)}")
+    return names
+
+
 OPTIONS = {
     "world": Option(_world, "bodies", "bodies = simulated people doing the paper's activities; footsteps = walking feet only"),
     "people": Option(_people, 1, "people on the carpet, 0..3"),
@@ -66,7 +77,10 @@ OPTIONS = {
     "speed": Option(float, 1.0, "1 = real time, 0 = as fast as possible"),
     "faults": Option(parse_bool, False, "inject line noise now and then (bit flips, garbage, torn frames)"),
     "scene_s": Option(_positive_s, 10.0, "seconds of each simulated scene (bodies world): then new activities and places"),
+    "activities": Option(_activities, "", "comma-separated activities and fall scenarios drawn per "
+                         "scene (bodies world; default: the paper's ten and walking), e.g. fall_forward,lie_down"),
 }
+
 
 
 def packing_for(bits: int) -> int:
@@ -99,8 +113,9 @@ class SimLink(Link):
         else:
             from sim.live import LiveCarpet
 
+            extra = {"activities": o["activities"]} if o["activities"] else {}
             carpet = LiveCarpet(o["grid"], o["grid"], o["people"], o["seed"], o["pitch_mm"], o["rate"], o["bits"],
-                                chunk_s=o["scene_s"], prefetch=o["speed"] > 0)
+                                chunk_s=o["scene_s"], prefetch=o["speed"] > 0, **extra)
             bits, sign = carpet.adc_bits, carpet.sign
         self.carpet = carpet
         tiles = 3 if o["grid"] % 3 == 0 else 1

@@ -108,6 +108,9 @@ def test_home_assistant_discovery_payloads(broker, subscribe):
     try:
         assert sink.wait_connected(10)
         assert len(expected) == 8
+        events = {f"homeassistant/binary_sensor/{DEVICE}_person_down/config",  # fall events (docs/falls.md)
+                  f"homeassistant/event/{DEVICE}_fall/config"}
+        expected |= events
         assert wait_until(lambda: expected <= {t for t, *_ in ha.messages}, 10)
         n_before = len(ha.messages)
         # Home Assistant restarts and announces itself: discovery is sent again
@@ -127,8 +130,9 @@ def test_home_assistant_discovery_payloads(broker, subscribe):
               activity}
     for topic, cfg in configs.items():
         pairs = [(a["topic"], a["payload_available"], a["payload_not_available"]) for a in cfg["availability"]]
-        if topic in carpet:  # the runtime AND the board (frames arriving)
-            assert cfg["availability_mode"] == "all" and cfg["state_topic"] == T.presence
+        if topic in carpet or topic in events:  # the runtime AND the board (frames arriving)
+            assert cfg["availability_mode"] == "all"
+            assert cfg["state_topic"] == (T.events if topic in events else T.presence)
             assert pairs == [(T.status, "online", "offline"), (T.board, "online", "offline")]
         else:  # diagnostics: while the runtime is up, so "board disconnected" can be shown
             assert pairs == [(T.status, "online", "offline")] and cfg["entity_category"] == "diagnostic"

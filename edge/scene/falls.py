@@ -1,0 +1,347 @@
+"""Fall and person-down detection from what the scene already measures (docs/falls.md).
+
+    det = FallDetector(FallConfig(), pitch_m=0.01905)
+    events = det.update(scene_frame, activities={track_id: "sit_up"})   # list of event dicts
+    events = det.reset(t_s, reason="board_lost")                          # clears what is raised
+
+Per frame the confirmed people are grouped into *bodies*: observations whose centres of pressure
+lie within ``merge_radius_m`` (a fallen person's feet and trunk often land as two tracks, over a
+metre apart; two people on their feet never merge). Each body gets its load (N), contact area (m²),
+centre and length (m: four standard deviations of its pressure along its major axis). Thresholds are
+on the area and the geometry, which calibration hardly changes; loads only gate (the calibrated load
+of a person standing reads well below their weight where the feet saturate the sensels). A body is
+
+- *on its feet* when a small, short footprint carries at least feet_min_force_n;
+- *on the floor* when a large footprint carries at least person_min_force_n (lying, not sitting,
+  kneeling or a plank); it stays there down to floor_stay_min_area_m2.
+
+A floor *episode* starts where a body comes onto the floor; its *arrival* is the time since a body
+last stood on its feet within fall_radius_m of it, if that was at least min_shift_m away (the load moved by about
+a body's height: sitting down, or a bag dropped or a pet lying down beside a standing person, moves
+it less), carrying at least 1/max_load_ratio of the lying load. ``fall`` is raised once the episode
+has lasted confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival
+time); ``person_down`` once it has lasted person_down_s when the arrival took at most down_window_s
+and the model did not call its tracks an exercise (push-ups, sit-ups) while the body moved. Both clear when the episode
+ends (nobody on the floor there for release_s), and all clear on reset() (board lost, runtime
+stopped).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+
+EVENT_TYPES = ("fall", "person_down")
+EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
+EXERCISE_AREA_FRACTION = 0.05  # ... or its contact area changes by more than this fraction
+EXERCISE_RATE_HZ = 14.0  # frames are counted as 1/14 s each towards exercise_s
+STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
+
+
+def _f(default, doc: str):
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata={"doc": doc})
+    return field(default=default, metadata={"doc": doc})
+
+
+@dataclass(frozen=True)
+class FallConfig:
+    """Fall and person-down events: thresholds in physical units (docs/falls.md)."""
+
+    enabled: bool = _f(True, "detect falls and people down and publish them as events")
+    person_down_s: float = _f(30.0, "person_down is raised after someone who arrived on the floor like a fall has "
+                                    "been there this long")
+    confirm_s: float = _f(0.8, "fall is raised once the body has stayed on the floor this long (fewer false alarms, "
+                               "later alerts)")
+    fall_window_s: float = _f(2.5, "a fall: from on the feet to on the floor within this (a slow collapse takes up "
+                                   "to ~2.5 s; lying down on purpose takes longer)")
+    down_window_s: float = _f(6.0, "person_down also for arrivals up to this slow (a slower, controlled lie-down "
+                                   "never raises it)")
+    release_s: float = _f(2.0, "events clear when nobody has been on the floor there for this long")
+    person_min_force_n: float = _f(150.0, "a body on the floor carries at least this load to count as a person (the "
+                                          "calibrated load of a standing adult reads ≈ 250–700 N)")
+    merge_radius_m: float = _f(1.5, "tracks whose centres of pressure are closer than this form one body (a fallen "
+                                    "person's feet and trunk often land as two tracks); two people on their feet "
+                                    "never merge")
+    feet_min_force_n: float = _f(60.0, "on the feet: at least this load (a person seated on a chair beside the "
+                                       "carpet has only their feet on it)")
+    feet_max_area_m2: float = _f(0.05, "on the feet: contact area at most this (two feet ≈ 0.02–0.045 m²)")
+    feet_max_length_m: float = _f(0.9, "on the feet: pressure length (4 standard deviations, major axis) at most this")
+    floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this (lying ≈ 0.05–0.11 m²)")
+    floor_min_length_m: float = _f(0.0, "on the floor (lying): pressure length at least this")
+    floor_long_m: float = _f(1.6, "... or a body this long (feet to shoulders on the floor) ...")
+    floor_long_min_area_m2: float = _f(0.025, "... with at least this contact area")
+    floor_stay_min_area_m2: float = _f(0.04, "still on the floor (once there): contact area at least this")
+    fall_radius_m: float = _f(1.6, "the body on its feet must have stood within this of where the load now lies")
+    min_shift_m: float = _f(0.45, "... and at least this far from it: the load moved by about a body's height "
+                                  "(sitting down or a bag dropped beside someone moves it less)")
+    max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this")
+    exercise_activities: list[str] = _f(["push_up", "sit_up"], "the model's activities that mark a floor exercise: "
+                                                                "no person_down once seen while the body moves ...")
+    exercise_s: float = _f(1.5, "... for this long in all (someone lying still is not exercising, whatever the "
+                                "model calls the pose)")
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, float) and not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"events.{f.name} must be a finite number ≥ 0, got {v!r}")
+        if self.fall_window_s > self.down_window_s:
+            raise ValueError("events.fall_window_s must not exceed events.down_window_s")
+        if self.person_down_s < self.confirm_s:
+            raise ValueError("events.person_down_s must be at least events.confirm_s")
+
+
+@dataclass
+class BodyFeatures:
+    """One body in one frame: its tracks, load, area, length and centre."""
+
+    track_ids: tuple[int, ...]
+    force_n: float
+    area_m2: float
+    length_m: float
+    centre_m: np.ndarray
+
+
+@dataclass
+class Observation:
+    """One confirmed person of one frame as the detector needs it: load, area, centre and the
+    pressure moments over their mask (sums of w, w·x, w·y, w·x², w·y², w·x·y; additive over tracks)."""
+
+    track_id: int
+    force_n: float
+    area_m2: float
+    centre_m: np.ndarray
+    moments: np.ndarray
+
+
+def observe(people, pressure_kpa: np.ndarray | None, pitch_m: float) -> list[Observation]:
+    """A SceneFrame's people → observations (the moments over each person's mask, inside its bbox)."""
+    out = []
+    for p in people:
+        m = np.zeros(6)
+        if pressure_kpa is not None:
+            rows, cols = p.bbox
+            w = np.where(p.mask[rows, cols], np.maximum(pressure_kpa[rows, cols], 0.0), 0.0)
+            rr, cc = np.nonzero(w)
+            if len(rr):
+                wv = w[rr, cc].astype(np.float64)
+                y = (rr + rows.start + 0.5) * pitch_m
+                x = (cc + cols.start + 0.5) * pitch_m
+                m = np.array([wv.sum(), wv @ x, wv @ y, wv @ (x * x), wv @ (y * y), wv @ (x * y)])
+        out.append(Observation(int(p.track_id), float(max(p.force_raw_n, 0.0)), float(p.area_m2),
+                               np.asarray(p.cop_raw_m, float), m))
+    return out
+
+
+def _body(members: list[Observation]) -> BodyFeatures:
+    force = float(sum(o.force_n for o in members))
+    area = float(sum(o.area_m2 for o in members))
+    m = np.sum([o.moments for o in members], axis=0)
+    if m[0] > 0:
+        mx, my = m[1] / m[0], m[2] / m[0]
+        cxx, cyy, cxy = m[3] / m[0] - mx * mx, m[4] / m[0] - my * my, m[5] / m[0] - mx * my
+        major = 0.5 * (cxx + cyy) + np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy ** 2)
+        return BodyFeatures(tuple(o.track_id for o in members), force, area, 4.0 * float(np.sqrt(max(major, 0.0))),
+                            np.array([mx, my]))
+    centre = np.average([o.centre_m for o in members], axis=0, weights=[max(o.force_n, 1e-6) for o in members])
+    return BodyFeatures(tuple(o.track_id for o in members), force, area, 0.0, centre)
+
+
+def merge(obs: list[Observation], merge_radius_m: float, apart=None) -> list[BodyFeatures]:
+    """Observations whose centres lie within merge_radius_m form one body (single linkage), except pairs
+    that ``apart(a, b)`` keeps apart (two people standing side by side)."""
+    if not obs:
+        return []
+    n = len(obs)
+    parent = list(range(n))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(n):
+        for j in range(i + 1, n):
+            if np.linalg.norm(obs[i].centre_m - obs[j].centre_m) <= merge_radius_m and not (apart and apart(obs[i], obs[j])):
+                parent[root(i)] = root(j)
+    groups: dict[int, list[Observation]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(obs[i])
+    return [_body(g) for g in groups.values()]
+
+
+def body_features(people, pressure_kpa: np.ndarray | None, pitch_m: float, merge_radius_m: float,
+                  apart=None) -> list[BodyFeatures]:
+    """Group a SceneFrame's people into bodies and measure each (see the module doc)."""
+    return merge(observe(people, pressure_kpa, pitch_m), merge_radius_m, apart)
+
+
+@dataclass
+class _Episode:
+    start_t: float
+    last_t: float
+    centre_m: np.ndarray
+    arrival_s: float | None
+    track_ids: set
+    exercise: bool = False
+    exercise_s: float = 0.0
+    area_m2: float = 0.0
+    fall: bool = False
+    down: bool = False
+    fall_conf: float = 0.0
+
+
+class FallDetector:
+    """Frame by frame: SceneFrame (+ the model's activity per track) → fall / person_down events."""
+
+    def __init__(self, config: FallConfig | None = None, pitch_m: float = 0.01905) -> None:
+        self.config = config or FallConfig()
+        self.pitch_m = float(pitch_m)
+        self._feet: deque = deque()  # (t_s, centre (2,)) of bodies on their feet, the last down_window_s
+        self._episodes: list[_Episode] = []
+        self._standing_since: dict[int, float] = {}
+        self.raised = {"fall": 0, "person_down": 0}
+
+    # ------------------------------------------------------------------ per frame
+    def update(self, scene_frame, activities: dict | None = None) -> list[dict]:
+        """Events of this frame (raised or cleared); an invalid frame changes nothing."""
+        if not self.config.enabled or not getattr(scene_frame, "valid", True):
+            return []
+        return self.step_observations(scene_frame.t_s, observe(scene_frame.people, scene_frame.pressure_kpa, self.pitch_m),
+                                      activities or {})
+
+    def step_observations(self, t_s: float, obs: list[Observation], activities: dict) -> list[dict]:
+        """The same from observations (the score replays cached ones): merged into bodies, then step()."""
+        c = self.config
+        standing = {}
+        for o in obs:  # how long each track has stood on its feet (a person's load on a small footprint)
+            if o.area_m2 <= c.feet_max_area_m2 and o.force_n >= c.person_min_force_n:
+                standing[o.track_id] = self._standing_since.get(o.track_id, t_s)
+        self._standing_since = standing
+
+        def apart(a: Observation, b: Observation) -> bool:  # two people standing side by side stay two
+            return all(t_s - standing.get(o.track_id, t_s) >= STANDING_APART_S for o in (a, b))
+
+        return self.step(t_s, merge(obs, c.merge_radius_m, apart), activities)
+
+    def step(self, t_s: float, bodies: list[BodyFeatures], activities: dict) -> list[dict]:
+        """The same from ready-made body features (tests and the score drive this directly)."""
+        c = self.config
+        events: list[dict] = []
+        while self._feet and self._feet[0][0] < t_s - c.down_window_s:
+            self._feet.popleft()
+        seen: set[int] = set()
+        for b in bodies:
+            ep = self._episode_near(b) if b.force_n >= c.person_min_force_n else None
+            if ep is not None and b.area_m2 < c.floor_stay_min_area_m2:
+                ep = None  # up again (or never down): the episode ends after release_s
+            if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
+                               and b.length_m <= c.feet_max_length_m):
+                self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
+                continue
+            if b.force_n < c.person_min_force_n:
+                continue  # a pet, a bag, a hand on the carpet
+            floor = b.length_m >= c.floor_min_length_m and (
+                b.area_m2 >= c.floor_min_area_m2 or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2))
+            if ep is None and not floor:
+                continue  # sitting, kneeling, a plank
+            if ep is None:
+                ep = _Episode(t_s, t_s, b.centre_m, self._arrival(t_s, b), set(b.track_ids), area_m2=b.area_m2)
+                self._episodes.append(ep)
+            moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
+                      or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
+            if moving and any(activities.get(k) in c.exercise_activities for k in b.track_ids):
+                ep.exercise_s += 1.0 / EXERCISE_RATE_HZ  # the model says exercise AND the body moves
+                ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
+            ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
+            ep.track_ids |= set(b.track_ids)
+            seen.add(id(ep))
+            events += self._advance(ep, t_s, b)
+        keep = []
+        for ep in self._episodes:
+            if id(ep) not in seen and t_s - ep.last_t >= c.release_s:
+                events += self._clear(ep, t_s, "up_or_gone")
+            else:
+                keep.append(ep)
+        self._episodes = keep
+        return events
+
+    def reset(self, t_s: float, reason: str = "board_lost") -> list[dict]:
+        """Forget everything; every raised event is cleared (so nothing stays raised for a lost board)."""
+        events = []
+        for ep in self._episodes:
+            events += self._clear(ep, t_s, reason)
+        self._episodes, self._feet, self._standing_since = [], deque(), {}
+        return events
+
+    @property
+    def active(self) -> dict[str, list[int]]:
+        """Track ids with a raised event, per type."""
+        return {"fall": [min(e.track_ids) for e in self._episodes if e.fall],
+                "person_down": [min(e.track_ids) for e in self._episodes if e.down]}
+
+    # ------------------------------------------------------------------ helpers
+    def _episode_near(self, b: BodyFeatures) -> _Episode | None:
+        best, dist = None, self.config.merge_radius_m
+        for ep in self._episodes:
+            d = float(np.linalg.norm(ep.centre_m - b.centre_m))
+            if d <= dist or ep.track_ids & set(b.track_ids):
+                best, dist = ep, min(d, dist)
+        return best
+
+    def _arrival(self, t_s: float, b: BodyFeatures) -> float | None:
+        """Seconds since this load stood on its feet nearby (see the module doc); None: not within down_window_s."""
+        c = self.config
+        for t, centre, force in reversed(self._feet):
+            d = float(np.linalg.norm(centre - b.centre_m))
+            if d <= c.fall_radius_m and b.force_n <= c.max_load_ratio * force:  # lighter: mid-air, not standing
+                return t_s - t if d >= c.min_shift_m else None  # the last time they stood: did the load move?
+        return None
+
+    def _advance(self, ep: _Episode, t_s: float, b: BodyFeatures) -> list[dict]:
+        c, out = self.config, []
+        held = t_s - ep.start_t
+        tid = min(ep.track_ids)
+        if not ep.fall and ep.arrival_s is not None and ep.arrival_s <= c.fall_window_s and held >= c.confirm_s:
+            ep.fall = True
+            ep.fall_conf = round(float(np.clip(1.0 - 0.5 * ep.arrival_s / max(c.fall_window_s, 1e-6), 0.5, 1.0)), 3)
+            self.raised["fall"] += 1
+            out.append(_event("fall", "raised", t_s, tid, ep.fall_conf, ep, b))
+        if (not ep.down and not ep.exercise and ep.arrival_s is not None and ep.arrival_s <= c.down_window_s
+                and held >= c.person_down_s):
+            ep.down = True
+            self.raised["person_down"] += 1
+            conf = round(float(np.clip(0.6 + 0.4 * (1.0 - ep.arrival_s / max(c.down_window_s, 1e-6)), 0.6, 1.0)), 3)
+            out.append(_event("person_down", "raised", t_s, tid, conf, ep, b))
+        if ep.down and ep.exercise:  # push-ups or sit-ups seen after all: an exercise, not a person down
+            out += self._clear(ep, t_s, "exercise", only="person_down")
+        return out
+
+    def _clear(self, ep: _Episode, t_s: float, reason: str, only: str | None = None) -> list[dict]:
+        out = []
+        tid = min(ep.track_ids)
+        for kind in EVENT_TYPES:
+            if only and kind != only:
+                continue
+            attr = "fall" if kind == "fall" else "down"
+            if getattr(ep, attr):
+                setattr(ep, attr, False)
+                out.append({"type": kind, "state": "cleared", "t_s": round(float(t_s), 3), "track_id": tid,
+                            "reason": reason})
+        return out
+
+
+def _event(kind: str, state: str, t_s: float, tid: int, conf: float, ep: _Episode, b: BodyFeatures) -> dict:
+    return {"type": kind, "state": state, "t_s": round(float(t_s), 3), "track_id": tid, "confidence": conf,
+            "on_floor_s": round(float(t_s - ep.start_t), 2),
+            "arrival_s": None if ep.arrival_s is None else round(float(ep.arrival_s), 2),
+            "position_m": [round(float(v), 3) for v in b.centre_m], "area_m2": round(b.area_m2, 4),
+            "length_m": round(b.length_m, 3)}
+
+
+__all__ = ["EVENT_TYPES", "BodyFeatures", "FallConfig", "FallDetector", "Observation", "body_features", "merge", "observe"]

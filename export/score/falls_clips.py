@@ -1,0 +1,169 @@
+"""The fall score's clips: simulated scenes → the scene's per-frame body features (cached).
+
+    clips = clip_list(seeds=(3, 4), ordinary_s=30.0)
+    feats = clip_features(clips[0], body)      # {"name", "kind", "truth", "seconds", "frames": [[body, …], …]}
+
+Each clip is one scene on a 96×96 carpet at 14 Hz: a fall scenario (sim.motion.falls), a hard
+negative (a look-alike, one of the simulator's activities, a pet, a dropped bag beside a standing
+person) or ordinary activity. Pressure is the contact model's (sim.contact) plus the objects'
+(sim.objects), clean (no sensor model, no calibration: the path a perfect calibration gives); it goes
+through the runtime's own SceneTracker and :func:`edge.scene.falls.body_features`, so the detector
+sees what it sees on the board: the scene's observations per frame (track, load, area, centre and
+pressure moments; edge.scene.falls.observe), merged into bodies when the detector replays them. The model's activity is not used (the detector then works from
+pressure alone).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+RATE_HZ = 14.0
+GRID = 96
+PITCH_M = 0.01905
+CHUNK_S = 10.0
+ORDINARY = ("stepping", "bending", "turning", "squat", "twisting", "raising_arms", "lunge", "walking", "standing")
+EXERCISE = ("push_up", "sit_up", "sitting")
+
+
+@dataclass(frozen=True)
+class Clip:
+    name: str
+    kind: str  # fall | lookalike | activity | pet | bag
+    what: str  # the scenario / activity
+    seed: int
+    seconds: float
+
+
+def clip_list(seeds, ordinary_s: float = 30.0, falls: bool = True, negatives: bool = True) -> list[Clip]:
+    from sim.motion.falls import FALLS, LOOKALIKES
+
+    out = []
+    for s in seeds:
+        if falls:
+            out += [Clip(f"{f}-s{s}", "fall", f, s, 0.0) for f in FALLS]
+        if negatives:
+            out += [Clip(f"{f}-s{s}", "lookalike", f, s, 0.0) for f in LOOKALIKES]
+            chunks = max(1, int(round(ordinary_s / CHUNK_S)))  # as the live carpet: a new scene every 10 s
+            out += [Clip(f"{a}-s{s}-{i}", "activity", a, s, CHUNK_S) for a in ORDINARY + EXERCISE for i in range(chunks)]
+            out += [Clip(f"pet-s{s}", "pet", "pet", s, 2 * ordinary_s), Clip(f"bag-s{s}", "bag", "bag", s, ordinary_s)]
+    return out
+
+
+def _people(clip: Clip, body, rng):
+    """[(Track, load fraction (T,))], truth, seconds."""
+    from sim.motion import Subject, person_track, scene
+    from sim.motion.falls import fall_track, on_carpet
+
+    subject = Subject.random(100 + clip.seed, rng)
+    size = GRID * PITCH_M
+    if clip.kind in ("fall", "lookalike"):
+        for attempt in range(4):  # a tall subject's fall may not fit on the carpet: draw another subject
+            if attempt:
+                subject = Subject.random(100 + clip.seed + 1000 * attempt, rng)
+            lie = float(rng.uniform(33.0, 40.0)) if clip.kind == "fall" else float(rng.uniform(20.0, 45.0))
+            try:
+                ft = on_carpet(fall_track(subject, clip.what, RATE_HZ, rng, body, lie_s=lie), (size, size), rng, body)
+                break
+            except ValueError:
+                if attempt == 3:
+                    raise
+        return [(ft.track, ft.load_fraction)], ft.truth, ft.truth["seconds"]
+    if clip.kind == "pet":
+        return [], {"scenario": "pet", "fall": False}, clip.seconds
+    acts = [clip.what] if clip.kind == "activity" else ["standing"]
+    sc = scene([subject], acts, clip.seconds, RATE_HZ, (size, size), rng, model=body)
+    tr = sc.tracks[0]
+    return [(tr, np.ones(len(tr)))], {"scenario": clip.what, "fall": False}, clip.seconds
+
+
+def clip_features(clip: Clip, body) -> dict:
+    """Run one clip through contact → SceneTracker → body_features (see the module doc)."""
+    from edge.scene.falls import observe
+    from edge.scene.pipeline import SceneTracker
+    from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
+    from sim.objects import DroppedBag, Pet
+
+    rng = np.random.default_rng((clip.seed, sum(map(ord, clip.name))))
+    people, truth, seconds = _people(clip, body, rng)
+    n = int(round(seconds * RATE_HZ))
+    size = GRID * PITCH_M
+    objects = []
+    if clip.kind == "pet":
+        objects.append(Pet.random(rng, size, seconds))
+    if clip.kind == "bag":  # dropped beside the person, 0.35–0.8 m from their pelvis
+        tr = people[0][0]
+        bag = DroppedBag.random(rng, size, drop_s=float(rng.uniform(2, seconds / 2)))
+        for _ in range(50):
+            ang, dist = rng.uniform(0, 2 * np.pi), rng.uniform(0.35, 0.8)
+            c = tr.transl_m[0, :2] + dist * np.array([np.cos(ang), np.sin(ang)])
+            if np.all(c > 0.25) and np.all(c < size - 0.25):
+                break
+        bag.centre_m = tuple(c)
+        objects.append(bag)
+        truth["bag_kg"] = round(bag.mass_kg, 1)
+    carpet = ContactModel(GRID, GRID, pitch_m=PITCH_M)
+    tissue = tissue_stiffness(body)
+    verts = []
+    for tr, load in people:
+        mass = subject_mass_kg(body, tr.betas)
+        v = body.forward(tr.pose_aa[:n], tr.betas, tr.transl_m[:n], vertices=True)["vertices"]
+        verts.append((v, mass, load))
+    st = SceneTracker(GRID, GRID, PITCH_M)
+    frames = []
+    t0 = time.perf_counter()
+    for k in range(n):
+        t = k / RATE_HZ
+        p = np.zeros((GRID, GRID), np.float32)
+        for v, mass, load in verts:
+            if k < len(v) and load[k] > 0:
+                p += carpet.pressure_kpa(v[k], body.faces, mass * float(load[k]), static=True,
+                                         tissue_kpa_per_mm=tissue).pressure_kpa
+        for o in objects:
+            p += o.pressure_kpa(t, GRID, GRID, PITCH_M)
+        sf = st.update(p, t)
+        obs = observe(sf.people, sf.pressure_kpa, PITCH_M) if sf.valid else []
+        frames.append([[o.track_id, round(o.force_n, 2), round(o.area_m2, 6), [round(float(x), 5) for x in o.centre_m],
+                        [float(f"{x:.7g}") for x in o.moments]] for o in obs])
+    return {"name": clip.name, "kind": clip.kind, "what": clip.what, "seed": clip.seed, "truth": truth,
+            "seconds": round(n / RATE_HZ, 3), "frames": frames, "sim_s": round(time.perf_counter() - t0, 1)}
+
+
+def main(argv=None) -> int:
+    """python -m export.score.falls_clips OUT.jsonl SEED [SEED …] [--ordinary-s S]: append clip features."""
+    import argparse
+    import json
+    from pathlib import Path
+
+    from edge.body import BodyModel
+
+    ap = argparse.ArgumentParser(description=main.__doc__)
+    ap.add_argument("out")
+    ap.add_argument("seeds", type=int, nargs="+")
+    ap.add_argument("--ordinary-s", type=float, default=30.0)
+    ap.add_argument("--only", choices=("falls", "negatives"))
+    a = ap.parse_args(argv)
+    body = BodyModel.load("lite")
+    out = Path(a.out)
+    done = set()
+    if out.exists():
+        done = {json.loads(line)["name"] for line in out.read_text().splitlines() if line.strip()}
+    clips = clip_list(a.seeds, a.ordinary_s, falls=a.only != "negatives", negatives=a.only != "falls")
+    for clip in clips:
+        if clip.name in done:
+            continue
+        try:
+            got = clip_features(clip, body)
+        except ValueError as exc:  # a scene that does not fit on the carpet: say so, go on
+            print(f"{clip.name}: skipped ({exc})", flush=True)
+            continue
+        with out.open("a") as f:
+            f.write(json.dumps(got) + "\n")
+        print(f"{clip.name}: {got['seconds']} s in {got['sim_s']} s", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

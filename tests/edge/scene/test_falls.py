@@ -1,0 +1,180 @@
+"""The fall detector on scripted per-frame body features: each fall kind and hard negative, its events."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, body_features
+from edge.runtime.events import EventStage
+
+RATE = 14.0
+FEET = dict(force_n=650.0, area_m2=0.035, length_m=0.55)
+LYING = dict(force_n=650.0, area_m2=0.09, length_m=0.75)
+SITTING = dict(force_n=650.0, area_m2=0.058, length_m=0.8)  # ≈ 11 kPa: neither on the feet nor lying
+
+
+def body(ids, xy, **kw):
+    return BodyFeatures(tuple(ids), kw["force_n"], kw["area_m2"], kw["length_m"], np.asarray(xy, float))
+
+
+def run(script, config=None, activities=None):
+    """script: [(seconds, [bodies])] segments → [(type, state, t_s, confidence)]."""
+    det = FallDetector(config or FallConfig())
+    out, t = [], 0.0
+    for seconds, bodies in script:
+        for _ in range(int(round(seconds * RATE))):
+            for e in det.step(t, bodies, activities or {}):
+                out.append((e["type"], e["state"], e["t_s"], e.get("confidence")))
+            t += 1 / RATE
+    return out, det
+
+
+def fall_script(transit_s, lie_s, up=True, shift=(0.0, 0.9), transit=None):
+    a, b = np.array([0.9, 0.4]), np.array([0.9, 0.4]) + shift
+    script = [(3.0, [body([1], a, **FEET)])]
+    script.append((transit_s, transit if transit is not None else []))  # toppling: no settled footprint
+    script.append((lie_s, [body([2], b, **LYING)]))
+    if up:
+        script.append((5.0, [body([2], a, **FEET)]))
+    return script
+
+
+@pytest.mark.parametrize("transit_s", [0.3, 0.7, 1.5])  # forward/backward/sideways falls; a slow collapse
+def test_a_fall_raises_fall_then_person_down_and_both_clear_when_up(transit_s):
+    ev, det = run(fall_script(transit_s, 34.0))
+    kinds = [(k, s) for k, s, _, _ in ev]
+    assert kinds == [("fall", "raised"), ("person_down", "raised"), ("fall", "cleared"), ("person_down", "cleared")]
+    impact = 3.0 + transit_s
+    t_fall, t_down = ev[0][2], ev[1][2]
+    assert 0 < t_fall - impact <= 1.5  # within confirm_s and a frame
+    assert 29.9 <= t_down - impact <= 32.0
+    assert 0.5 <= ev[0][3] <= 1.0 and det.active == {"fall": [], "person_down": []}
+
+
+def test_fall_split_over_two_tracks_still_one_fall():
+    """The feet and the trunk land as two tracks over a metre apart: one body, one fall."""
+    a = np.array([0.9, 0.4])
+    script = [(3.0, [body([1], a, **FEET)]), (0.5, []),
+              (5.0, [body([2], a + (0, 0.5), force_n=160, area_m2=0.02, length_m=0.3),
+                     body([3], a + (0, 1.3), force_n=470, area_m2=0.07, length_m=0.6)])]
+    ev, _ = run(script)
+    assert [(k, s) for k, s, _, _ in ev] == [("fall", "raised")]
+
+
+def test_lying_down_slowly_is_no_fall_and_no_person_down():
+    """Kneel, sit, lie back over 7 s (an exercise mat) and stay 40 s."""
+    a = np.array([0.9, 0.4])
+    script = [(3.0, [body([1], a, **FEET)]), (7.0, [body([1], a + (0, 0.4), **SITTING)]),
+              (40.0, [body([1], a + (0, 0.9), **LYING)])]
+    ev, _ = run(script)
+    assert ev == []
+
+
+def sit_ups(a, seconds):
+    """Lying, curling up and back every 2 s: the area and the centre change."""
+    out = []
+    for i in range(int(seconds / 2)):
+        out.append((1.0, [body([2], a + (0, 0.9), **LYING)]))
+        out.append((1.0, [body([2], a + (0, 0.75), force_n=650.0, area_m2=0.065, length_m=0.6)]))
+    return out
+
+
+def test_floor_exercises_never_raise_person_down():
+    """Someone drops fast to the floor for sit-ups (the model says sit_up, the body moves): no person_down."""
+    a = np.array([0.9, 0.4])
+    script = [(3.0, [body([1], a, **FEET)]), (0.5, [])] + sit_ups(a, 40.0)
+    ev, _ = run(script, activities={2: "sit_up"})
+    assert ("person_down", "raised") not in [(k, s) for k, s, _, _ in ev]
+
+
+def test_lying_still_is_a_person_down_whatever_the_model_calls_it():
+    ev, _ = run(fall_script(0.5, 34.0, up=False), activities={2: "sit_up"})
+    assert ("person_down", "raised") in [(k, s) for k, s, _, _ in ev]
+
+
+def test_sitting_kneeling_and_planks_are_not_on_the_floor():
+    a = np.array([0.9, 0.4])
+    plank = dict(force_n=650.0, area_m2=0.03, length_m=1.3)
+    for pose in (SITTING, plank):
+        ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.3, []), (40.0, [body([1], a + (0, 0.3), **pose)])])
+        assert ev == []
+
+
+def test_a_dropped_bag_or_a_pet_beside_someone_standing_raises_nothing():
+    a = np.array([0.9, 0.4])
+    bag = [(3.0, [body([1], a, **FEET)]), (20.0, [body([1, 2], a + (0.1, 0.05), force_n=800, area_m2=0.12, length_m=1.1)])]
+    assert run(bag)[0] == []
+    # a 30 kg dog trots (four small paws), then lies down where it stands: a big footprint, but the load hardly moved
+    dog = [(3.0, [body([5], a, force_n=290, area_m2=0.01, length_m=0.4)]),
+           (40.0, [body([5], a + (0.1, 0.05), force_n=290, area_m2=0.12, length_m=0.5)])]
+    assert run(dog)[0] == []
+    # a cat (5 kg) is too light to be anyone on the floor, wherever it lies
+    cat = [(3.0, [body([6], a, force_n=49, area_m2=0.004, length_m=0.3)]),
+           (40.0, [body([6], a + (0.6, 0.0), force_n=49, area_m2=0.06, length_m=0.3)])]
+    assert run(cat)[0] == []
+
+
+def test_person_down_delay_is_configurable():
+    ev, _ = run(fall_script(0.5, 12.0, up=False), replace(FallConfig(), person_down_s=10.0))
+    t_down = [t for k, s, t, _ in ev if (k, s) == ("person_down", "raised")]
+    assert t_down and 10.0 <= t_down[0] - 3.5 <= 10.5
+
+
+def test_config_refuses_bad_values():
+    with pytest.raises(ValueError, match="person_down_s"):
+        FallConfig(person_down_s=-1.0)
+    with pytest.raises(ValueError, match="fall_window_s"):
+        FallConfig(fall_window_s=9.0, down_window_s=6.0)
+
+
+class _Clock:
+    def __init__(self):
+        self.t = 100.0
+
+    def __call__(self):
+        return self.t
+
+
+def test_a_lost_board_never_leaves_person_down_standing():
+    clock = _Clock()
+    stage = EventStage(replace(FallConfig(), person_down_s=2.0), "carpet-01", 0.01905, board_lost_s=3.0,
+                       clock=clock, monotonic=clock)
+    script = fall_script(0.5, 4.0, up=False)
+    t = 0.0
+    raised = []
+    for seconds, bodies in script:
+        for _ in range(int(round(seconds * RATE))):
+            stage._last_frame_mono = clock.t
+            raised += [e for e in stage.detector.step(t, bodies, {}) if e["state"] == "raised"]
+            t += 1 / RATE
+            clock.t += 1 / RATE
+    assert {e["type"] for e in raised} == {"fall", "person_down"}
+    assert stage.idle() == []  # frames stopped only now
+    clock.t += 3.5  # the board is unplugged: no frame for 3.5 s
+    cleared = stage.idle()
+    assert {(e["type"], e["state"], e["reason"]) for e in cleared} == {("fall", "cleared", "board_lost"),
+                                                                        ("person_down", "cleared", "board_lost")}
+    assert all(e["schema"] == "cavatar.events/1" and e["device"] == "carpet-01" for e in cleared)
+    assert stage.active == {"fall": [], "person_down": []} and stage.idle() == []
+
+
+def test_body_features_merge_near_tracks_and_measure_the_load():
+    """Two observations 0.8 m apart form one body; its length spans both."""
+    from types import SimpleNamespace
+
+    pitch = 0.02
+    p = np.zeros((96, 96), np.float32)
+    p[20:30, 20:30] = 10.0
+    p[60:70, 20:30] = 10.0
+    people = []
+    for tid, rows in ((1, slice(20, 30)), (2, slice(60, 70))):
+        m = np.zeros_like(p, bool)
+        m[rows, 20:30] = True
+        people.append(SimpleNamespace(track_id=tid, cop_raw_m=np.array([0.5, (rows.start + 5) * pitch]),
+                                      force_raw_n=400.0, area_m2=0.04, mask=m, bbox=(rows, slice(20, 30))))
+    one = body_features(people, p, pitch, merge_radius_m=1.0)
+    assert len(one) == 1 and one[0].track_ids == (1, 2) and one[0].force_n == 800.0
+    assert 1.4 < one[0].length_m < 1.8  # 4σ of two equal patches 0.8 m apart ≈ 1.6 m
+    two = body_features(people, p, pitch, merge_radius_m=0.5)
+    assert len(two) == 2 and all(b.length_m < 0.4 for b in two)
