@@ -81,10 +81,13 @@ def calibration(d: dict[str, Any] | None) -> list[str]:
     return lines + ["", measured_on(d)]
 
 
+ERRORS = ("mpjpe_cm", "pa_mpjpe_cm", "heading_over90_pct", "pve_cm", "transl_cm")
+
+
 def _error(e: dict[str, Any]) -> list[str]:
-    if e["status"] == "evaluated":
-        return [_f(e["mpjpe_cm"]), _f(e["pve_cm"]), _f(e["transl_cm"])]
-    return [e["status"]] * 3
+    if e["status"] == "evaluated":  # results from before PA-MPJPE and heading were measured show "—" there
+        return [_f(e[k]) if k in e else "—" for k in ERRORS]
+    return [e["status"]] * len(ERRORS)
 
 
 def models(d: dict[str, Any] | None) -> list[str]:
@@ -100,7 +103,8 @@ def models(d: dict[str, Any] | None) -> list[str]:
         scope = f"Errors not evaluated: {ev['reason']}."
     lines += ["Per published frame: encoder (batch 1) + head over the 40-frame window of cached features, onnxruntime. "
               "Untrained variants are timed only. " + scope, "",
-              "| variant | weights | threads | median ms | p99 ms | MPJPE | PVE | transl | size MB |", "|---|---|---|---|---|---|---|---|---|"]
+              "| variant | weights | threads | median ms | p99 ms | MPJPE | PA-MPJPE | heading >90° % | PVE | transl | size MB |",
+              "|---" * 11 + "|"]
     for v in d["variants"]:
         for s in v["speed"]:
             lines.append("| " + " | ".join([v["name"], v["weights"].split(" (")[0], str(s["threads"]), _f(s["median_ms"], 3),

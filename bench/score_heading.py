@@ -61,7 +61,8 @@ def run(data: list[str], split: str, bundle: str, heading_params: str | None) ->
             out = np.empty_like(pose)
             for t in range(len(pose)):
                 t0 = time.perf_counter()
-                out[t] = r.decide(pose[t], frame_cue(kpa[t], pitch, params), probs[t])
+                cue, on_feet = frame_cue(kpa[t], pitch, params)
+                out[t] = r.decide(pose[t], cue, probs[t], on_feet)
                 cost_ms.append((time.perf_counter() - t0) * 1e3)
             frames_n += len(tr)
             for key, p in (("model", pose), ("resolved", out)):  # the true betas for both: the heading's share alone

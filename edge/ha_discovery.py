@@ -44,16 +44,32 @@ def _availability(*topics: str) -> list[dict[str, str]]:
     return [{"topic": t, "payload_available": ONLINE, "payload_not_available": OFFLINE} for t in topics]
 
 
-def discovery(t: DeviceTopics, sw_version: str = "", activities: Sequence[str] | None = None) -> list[tuple[str, dict]]:
-    """(config topic, payload) of every entity. ``activities``: the model's labels (info.activities); without them
-    the activity sensor is plain text (still valid), with them an ``enum`` whose options are the labels and "none"."""
+def carpet_availability(t: DeviceTopics) -> dict[str, Any]:
+    """Availability of an entity that reports what is on the carpet: the runtime AND the board must be online."""
+    return {"availability": _availability(t.status, t.board), "availability_mode": "all"}
+
+
+def entity_config(t: DeviceTopics, component: str, object_id: str, fields: dict[str, Any],
+                  sw_version: str = "") -> tuple[str, dict]:
+    """(config topic, payload) of one entity, with what every CAvatar entity carries: unique_id, default_entity_id,
+    the shared device and the origin. ``fields``: the entity's own options (state_topic, availability, name, …).
+    For entities added elsewhere (e.g. events), so that they follow the same conventions."""
     device: dict[str, Any] = {"identifiers": [f"cavatar_{t.device}"], "name": f"CAvatar {t.device}",
                               "manufacturer": "CAvatar", "model": "CAvatar Edge carpet"}
     origin: dict[str, Any] = {"name": ORIGIN_NAME}
     if sw_version:
         device["sw_version"] = sw_version
         origin["sw_version"] = sw_version
-    carpet = {"state_topic": t.presence, "availability": _availability(t.status, t.board), "availability_mode": "all"}
+    payload = {"unique_id": f"cavatar_{t.device}_{object_id}",
+               "default_entity_id": f"{component}.{entity_slug(t.device)}_{object_id}",
+               **fields, "device": device, "origin": origin}
+    return t.ha_config_topic(component, object_id), payload
+
+
+def discovery(t: DeviceTopics, sw_version: str = "", activities: Sequence[str] | None = None) -> list[tuple[str, dict]]:
+    """(config topic, payload) of every entity. ``activities``: the model's labels (info.activities); without them
+    the activity sensor is plain text (still valid), with them an ``enum`` whose options are the labels and "none"."""
+    carpet = {"state_topic": t.presence, **carpet_availability(t)}
     runtime = {"availability": _availability(t.status)}
     diagnostic = {"state_topic": t.info, "entity_category": "diagnostic", **runtime}
     activity: dict[str, Any] = {"name": "Activity", "icon": "mdi:run", "value_template": "{{ value_json.activity }}"}
@@ -82,13 +98,7 @@ def discovery(t: DeviceTopics, sw_version: str = "", activities: Sequence[str] |
         ("sensor", "runtime_state", {**diagnostic, "name": "Runtime state", "device_class": "enum",
                                      "options": list(RUNTIME_STATES), "value_template": "{{ value_json.state }}"}),
     ]
-    slug = entity_slug(t.device)
-    out = []
-    for component, object_id, fields in entities:
-        payload = {"unique_id": f"cavatar_{t.device}_{object_id}", "default_entity_id": f"{component}.{slug}_{object_id}",
-                   **fields, "device": device, "origin": origin}
-        out.append((t.ha_config_topic(component, object_id), payload))
-    return out
+    return [entity_config(t, component, object_id, fields, sw_version) for component, object_id, fields in entities]
 
 
-__all__ = ["discovery", "entity_slug", "RUNTIME_STATES"]
+__all__ = ["RUNTIME_STATES", "carpet_availability", "discovery", "entity_config", "entity_slug"]

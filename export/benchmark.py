@@ -367,6 +367,9 @@ def load_eval_tracks(data: list[str], split: str) -> dict[tuple[int, int], dict[
     return groups
 
 
+ERROR_KEYS = ("mpjpe_cm", "pa_mpjpe_cm", "heading_over90_pct", "pve_cm", "transl_cm")  # export.tables.summarise's
+
+
 def variant_error(v: Variant, groups: dict, stride: int) -> dict[str, Any]:
     from export.tables import evaluate_bundle
 
@@ -381,9 +384,8 @@ def variant_error(v: Variant, groups: dict, stride: int) -> dict[str, Any]:
         return {"status": "not evaluated", "reason": f"no --data of a {v.grid[0]}×{v.grid[1]} carpet"}
     if abs(g["pitch_m"] - v.pitch_m) > 0.05 * v.pitch_m:
         return {"status": "not evaluated", "reason": f"data pitch {g['pitch_m']} m, bundle pitch {v.pitch_m} m"}
-    o = evaluate_bundle(v.bundle_dir, g["tracks"], g["pitch_m"], frame_stride=stride)["overall"]
-    return {"status": "evaluated", "mpjpe_cm": o["mpjpe_cm"], "pve_cm": o["pve_cm"], "transl_cm": o["transl_cm"],
-            "frames": o["frames"]}
+    o = evaluate_bundle(v.bundle_dir, g["tracks"], g["pitch_m"], frame_stride=stride)["overall"]  # heading resolved
+    return {"status": "evaluated", **{k: o[k] for k in ERROR_KEYS}, "frames": o["frames"]}
 
 
 def baseline_error(manifest: dict[str, Any], group: dict[str, Any], stride: int) -> dict[str, Any] | None:
@@ -396,7 +398,7 @@ def baseline_error(manifest: dict[str, Any], group: dict[str, Any], stride: int)
     e = baseline_errors((np.array(base["pose_aa"]), np.array(base["betas"]), float(base["pelvis_height_m"])),
                         group["tracks"], group["pitch_m"], frame_stride=stride)
     o = summarise(e)["overall"]
-    return {"mpjpe_cm": o["mpjpe_cm"], "pve_cm": o["pve_cm"], "transl_cm": o["transl_cm"], "frames": o["frames"]}
+    return {**{k: o[k] for k in ERROR_KEYS}, "frames": o["frames"]}
 
 
 # ---------------------------------------------------------------------------------------------- ratios
@@ -768,13 +770,13 @@ def _num(v: Any, digits: int = 2) -> str:
 
 def _error_cells(e: dict[str, Any]) -> list[str]:
     if e["status"] == "evaluated":
-        return [_num(e["mpjpe_cm"]), _num(e["pve_cm"]), _num(e["transl_cm"])]
-    return [e["status"]] * 3
+        return [_num(e.get(k)) for k in ERROR_KEYS]
+    return [e["status"]] * len(ERROR_KEYS)
 
 
 def variant_table(result: dict[str, Any]) -> list[str]:
-    lines = ["| variant | weights | threads | median ms | p99 ms | frames/s | peak MiB | size MB | MPJPE cm | PVE cm | transl cm |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| variant | weights | threads | median ms | p99 ms | frames/s | peak MiB | size MB | MPJPE cm | PA-MPJPE cm | "
+             "heading >90° % | PVE cm | transl cm |", "|---" * 13 + "|"]
     for r in result["variants"]:
         for s in r["speed"]:
             lines.append("| " + " | ".join([r["name"], r["weights"].split(" (")[0], str(s["threads"]), _num(s["median_ms"]),

@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from edge.infer.heading import frame_cue, resolve_sequence
+from edge.infer.heading import resolve_sequence, sequence_cues
 from edge.infer.normalise import center_of_pressure_m, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track, corrupt
@@ -74,7 +74,7 @@ def predict_track(tr: Track, encode: Encode, head: Head, window: int, pitch_m: f
         logits = out["activity_logits"].astype(np.float64)
         probs = np.exp(logits - logits.max(-1, keepdims=True))
         probs /= probs.sum(-1, keepdims=True)
-        cues = np.stack([frame_cue(f, pitch_m, params) for f in kpa])
+        cues = sequence_cues(kpa, pitch_m, params)
         out["pose_aa_model"] = out["pose_aa"]
         out["pose_aa"] = resolve_sequence(out["pose_aa"], cues, probs, params, weights)
         out = {k: v[frames] for k, v in out.items()}

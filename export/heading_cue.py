@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from edge.infer.heading import PARAMS_FILE, HeadingParams, cue_yaw_rad, frame_cue, resolve_sequence, yaw_rad
+from edge.infer.heading import PARAMS_FILE, HeadingParams, cue_yaw_rad, resolve_sequence, sequence_cues, yaw_rad
 from edge.infer.rotations import rot6d_to_axis_angle
 from export.data import Track
 
@@ -28,9 +28,10 @@ GRID = {
     "min_offset_mm": (5.0,),
     "max_offset_mm": (15.0, 20.0),
     "decay": (0.97, 0.99),
-    "max_evidence": (10.0, 30.0),
+    "max_evidence": (30.0,),
     "min_evidence": (0.5, 1.5),
-    "hold_last": (0.0, 1.0),
+    "hold_last": (0.0,),
+    "off_feet_decay": (0.97, 0.9, 0.8),
 }
 
 
@@ -70,7 +71,7 @@ def activity_weights(tracks: list[Track], preds: list, cues: list[np.ndarray], n
     way) − 1, clipped to [0, 1]; activities predicted in fewer than ``min_frames`` cued frames get 0."""
     right = np.zeros(len(names))
     seen = np.zeros(len(names))
-    for tr, (_, _, probs), cue in zip(tracks, preds, cues):
+    for tr, (_, _, probs), (cue, _) in zip(tracks, preds, cues):
         has = np.hypot(cue[:, 0], cue[:, 1]) > 0
         ok = np.abs(_wrap(np.array([cue_yaw_rad(c) for c in cue]) - yaw_rad(tr.pose_aa[:, :3]))) < np.pi / 2
         a = probs.argmax(1)
@@ -90,7 +91,7 @@ def fit(tracks: list[Track], preds: list, pitch_m: float, names: list[str], grid
         params = replace(base, **dict(zip(keys, values)))
         ck = tuple(getattr(params, k) for k in cue_keys)
         if ck not in cue_cache:
-            cues = [np.stack([frame_cue(f, pitch_m, params) for f in kpa]) for _, kpa, _ in preds]
+            cues = [sequence_cues(kpa, pitch_m, params) for _, kpa, _ in preds]
             cue_cache[ck] = cues, activity_weights(tracks, preds, cues, names)
         cues, weights = cue_cache[ck]
         w = np.array([weights[n] for n in names])

@@ -46,6 +46,9 @@ DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
   --title "lean-96 int8 on unseen subjects, two and three people"
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 1 --out "$EVAL/eval-new6-alone" \
   --title "lean-96 int8 on six more unseen subjects (seed 101), alone"
+"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --protocol seen-time --out "$EVAL/eval-seen-time" \
+  --title "lean-96 int8, the paper's protocol (training subjects of seed 2, last 10 % in time)"
+"$PY" -m export.tables --readme README.md "unseen=$EVAL/eval-test.json" "seen-time=$EVAL/eval-seen-time.json"
 "$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many48" --split test --subject s12 --subject s17 \
   --fractions 0,0.1,0.3,0.6 --steps 300 --lr 3e-4 --stage head --precision fp32 --out "$EVAL/finetune"
 echo "bundle: $BUNDLE; tables: $EVAL/eval-test.md, $EVAL/eval-multi.md, $EVAL/finetune.md"

@@ -261,8 +261,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {path}: {exc}", file=sys.stderr)
             return 2
         s = results[name].get("setup", {})
-        sources.append(f"{name}: {s.get('bundle', '?')}, {s.get('protocol', '?')}; subjects {', '.join(s.get('subjects', []))}; "
-                       f"every {s.get('frame_stride', '?')}th frame; `{path}`")
+        subjects = s.get("subjects", [])
+        who = ", ".join(subjects) if len(subjects) <= 6 else f"{len(subjects)} subjects"
+        sources.append(f"{name}: {s.get('bundle', '?')}, {s.get('protocol', '?')}; {who}; frame stride "
+                       f"{s.get('frame_stride', '?')}; `{path}`")
     readme = Path(args.readme)
     try:
         if not readme.is_file():

@@ -48,7 +48,8 @@ class HeadingParams:
     min_offset_mm: float = 5.0       # |centroid − CoP| along the long axis: below this no vote (noise) …
     max_offset_mm: float = 20.0      # … nor above this (a forefoot or a toe carrying the weight: bending, lunge)
     min_foot_share: float = 0.8      # the foot-like blobs must carry this share of the person's force
-    decay: float = 0.97              # per frame, of the track's summed evidence (a vector on the carpet)
+    decay: float = 0.97              # per frame, of the track's summed evidence (a vector on the carpet) …
+    off_feet_decay: float = 0.97     # … and per frame while the person is not on their feet (lying, on hands)
     max_evidence: float = 30.0       # its length is clipped to this
     min_evidence: float = 0.5        # shorter evidence decides nothing
     hold_last: float = 0.0           # 1: without evidence, keep the yaw published last (0: the model's)
@@ -136,11 +137,13 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
     return np.sign(offset_mm[vote])[:, None] * axis[vote], share
 
 
-def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> np.ndarray:
-    """(H,W) → (2,) the frame's forward evidence: the feet's votes summed (two feet that disagree
-    cancel); none when anything but feet carries much of the weight (hands, seat, knees)."""
+def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, bool]:
+    """(H,W) → ((2,) the frame's forward evidence, whether the person stands on their feet): the feet's
+    votes summed (two feet that disagree cancel); none when anything but feet carries much of the
+    weight (hands, seat, knees: then the person is not on their feet)."""
     v, share = foot_votes(pressure_kpa, pitch_m, params)
-    return v.sum(0) if len(v) and share >= params.min_foot_share else np.zeros(2)
+    on_feet = share >= params.min_foot_share
+    return (v.sum(0) if len(v) and on_feet else np.zeros(2)), bool(on_feet)
 
 
 def _quaternion(orient_aa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -208,15 +211,17 @@ class HeadingResolver:
                 activity_probs: np.ndarray | None = None) -> np.ndarray:
         """(72,) the model's pose, (H,W) the person's kPa (as the model saw it), (A,) the model's
         activity probabilities → (72,) the pose to publish."""
-        return self.decide(pose_aa, frame_cue(person_kpa, pitch_m, self.params), activity_probs)
+        cue, on_feet = frame_cue(person_kpa, pitch_m, self.params)
+        return self.decide(pose_aa, cue, activity_probs, on_feet)
 
-    def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None) -> np.ndarray:
-        """:meth:`resolve` with the frame's cue (2,) already computed."""
+    def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None,
+               on_feet: bool = True) -> np.ndarray:
+        """:meth:`resolve` with the frame's cue (2,) and whether the person is on their feet already computed."""
         p = self.params
         weight = 1.0
         if self.activity_weight is not None and activity_probs is not None:
             weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
-        e = self.evidence * p.decay + weight * np.asarray(cue, np.float64)
+        e = self.evidence * (p.decay if on_feet else p.off_feet_decay) + weight * np.asarray(cue, np.float64)
         length = float(np.hypot(e[0], e[1]))
         if length > p.max_evidence:
             e, length = e * (p.max_evidence / length), p.max_evidence
@@ -231,13 +236,20 @@ class HeadingResolver:
         return out
 
 
-def resolve_sequence(pose_aa: np.ndarray, cues: np.ndarray, activity_probs: np.ndarray | None,
+def sequence_cues(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, np.ndarray]:
+    """(L,H,W) → ((L,2) frame cues, (L,) on their feet) of :func:`frame_cue`, frame by frame."""
+    cues = [frame_cue(f, pitch_m, params) for f in pressure_kpa]
+    return np.array([c for c, _ in cues]).reshape(-1, 2), np.array([f for _, f in cues], bool)
+
+
+def resolve_sequence(pose_aa: np.ndarray, cues: tuple[np.ndarray, np.ndarray], activity_probs: np.ndarray | None,
                      params: HeadingParams, activity_weight: np.ndarray | None = None) -> np.ndarray:
-    """(L,72) one track's poses frame by frame, (L,2) their frame cues (:func:`frame_cue`), (L,A) activity
-    probabilities or None → (L,72) what a fresh resolver publishes (offline evaluation and fitting)."""
+    """(L,72) one track's poses frame by frame, their :func:`sequence_cues`, (L,A) activity probabilities
+    or None → (L,72) what a fresh resolver publishes (offline evaluation and fitting)."""
     r = HeadingResolver(params, activity_weight)
     probs = [None] * len(pose_aa) if activity_probs is None else activity_probs
-    return np.stack([r.decide(pose_aa[t], cues[t], probs[t]) for t in range(len(pose_aa))]).astype(np.float32)
+    cue, on_feet = cues
+    return np.stack([r.decide(pose_aa[t], cue[t], probs[t], bool(on_feet[t])) for t in range(len(pose_aa))]).astype(np.float32)
 
 
-__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]

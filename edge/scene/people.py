@@ -48,7 +48,7 @@ class Body:
 
 # Someone stepping in adds at least this fraction of the body's own weight: a person's force on the
 # board's path varies by ±30 % with posture (contact area, saturation), a newcomer adds a whole person.
-HEAVY_FRACTION = 0.5
+HEAVY_FRACTION = 0.35
 # ... and the body's own contacts still carry this fraction of its weight.
 KEEP_FRACTION = 0.8
 # A body reaches out only while the contacts it kept carry this fraction of its weight: a foot lands

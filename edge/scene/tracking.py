@@ -84,7 +84,7 @@ class PeopleTracker:
         decay = float(np.exp(-max(dt_s, 0.0) / cfg.extent_memory_s))
         tr.extent_m = max(float(extent_m), tr.extent_m * decay)
         tr.far_frames = tr.far_frames + 1 if far else 0
-        tr.heavy_frames = tr.heavy_frames + 1 if heavy else 0
+        tr.heavy_frames = tr.heavy_frames + 1 if heavy else max(0, tr.heavy_frames - 1)  # a step's dip does not reset it
         if tr.track_id is None or heavy:
             return
         if tr.weight_n is None:

@@ -150,7 +150,7 @@ def bending(style, rng, seconds, label):
                         left_shoulder=(-95, 0, -80), right_shoulder=(-95, 0, 80))
             side = _u(rng, -6, 6)
             down[J["spine2"], 1] = side  # a little twist to one side
-            d = 2.6 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 3.0 * style.tempo * _u(rng, 0.85, 1.15)
             a = min(a, MAX_BEND_SCALE / style.amplitude)  # the trunk stops a little below horizontal
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.6), styled(down, style, a * 1.03), FEET, LF, label=label)
@@ -171,7 +171,7 @@ def squat(style, rng, seconds, label):
                 down = pose(down, left_shoulder=(0, -75, 0), right_shoulder=(0, 75, 0), left_elbow=(0, -5, 0), right_elbow=(0, 5, 0))
             else:  # hands together in front of the chest
                 down = pose(down, left_shoulder=(0, -45, -55), right_shoulder=(0, 45, 55), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0))
-            d = 3.4 * style.tempo * _u(rng, 0.85, 1.15)
+            d = 3.6 * style.tempo * _u(rng, 0.85, 1.15)
             a = min(a, MAX_SQUAT_SCALE / style.amplitude)  # knees stop near 147°, however flexible the person
             t.add(0.45 * d, styled(down, style, a), FEET, LF, label=label)
             t.add(_u(rng, 0.1, 0.5), styled(down, style, a), FEET, LF, label=label)

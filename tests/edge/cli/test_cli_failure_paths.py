@@ -37,7 +37,7 @@ def cases(tmp, record_file):
         "render, unwritable": (["render", str(record_file), "--png", f"{unwritable}/x.png"], "cannot write"),
         "run, missing device": (["run", "--source", NO_PORT, "--calibration", str(tmp / "none.npz")], "calibration"),
         "run, unwritable status": (["run", "--status-file", f"{unwritable}/status.json", "--seconds", "1"],
-                                   "cannot be written"),
+                                   "set [runtime] status_file (--status-file) to a writable place"),
         "status, missing file": (["status", "--file", str(tmp / "none.json")], "no status file"),
         "config, missing file": (["config", "validate", str(tmp / "none.toml")], "no such file"),
         "peripherals, missing bus": (["peripherals", "--bus", "97"], "does not exist"),

@@ -49,21 +49,22 @@ def test_yaw_of_an_upright_body_and_the_half_turn():
 
 def test_heel_heavy_feet_point_to_their_toes():
     params = HeadingParams()
-    up = frame_cue(feet("up"), PITCH, params)
-    down = frame_cue(feet("down"), PITCH, params)
+    (up, on_feet), (down, _) = frame_cue(feet("up"), PITCH, params), frame_cue(feet("down"), PITCH, params)
+    assert on_feet
     assert up[1] < 0 and abs(up[0]) < 1e-6 * abs(up[1]) + 1e-9
     np.testing.assert_allclose(down, -up, atol=1e-9)
     # no cue: uniform blobs (no heel), a round blob, or a seat carrying most of the weight
     flat = feet("up", 8.0, 8.0)
-    assert not frame_cue(flat, PITCH, params).any()
+    assert not frame_cue(flat, PITCH, params)[0].any()
     round_blob = np.zeros((96, 96), np.float32)
     round_blob[40:48, 40:48] = np.linspace(4, 12, 8)[:, None]
-    assert not frame_cue(round_blob, PITCH, params).any()
+    assert not frame_cue(round_blob, PITCH, params)[0].any()
     # an extreme offset (22 mm: a forefoot or toes carrying the weight, as in bending) is not a vote
-    assert not frame_cue(feet("up", 12.0, 4.0), PITCH, params).any()
+    assert not frame_cue(feet("up", 12.0, 4.0), PITCH, params)[0].any()
     seat = feet("up")
     seat[60:80, 30:60] = 10.0
-    assert not frame_cue(seat, PITCH, params).any()
+    cue, on_feet = frame_cue(seat, PITCH, params)
+    assert not cue.any() and not on_feet  # the seat carries the weight: not on their feet
 
 
 def test_the_resolver_turns_a_backwards_body_and_keeps_a_right_one():
@@ -99,9 +100,19 @@ def test_a_turning_person_is_followed():
     for _ in range(10):
         r.resolve(upright(0.0), feet("up"), PITCH)
     for _ in range(15):  # now facing yaw +90°: feet toward +x; the model says so too, then backwards
-        r.decide(upright(np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
-    out = r.decide(upright(-np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params))
+        r.decide(upright(np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params)[0])
+    out = r.decide(upright(-np.pi / 2), rot @ frame_cue(feet("up"), PITCH, r.params)[0])
     assert yaw_rad(out[:3]) == pytest.approx(np.pi / 2, abs=1e-5)
+
+
+def test_evidence_fades_faster_off_the_feet():
+    r = HeadingResolver(HeadingParams(decay=1.0, off_feet_decay=0.5, max_evidence=5.0, min_evidence=0.5))
+    for _ in range(5):
+        r.resolve(upright(0.0), feet("up"), PITCH)
+    r.decide(upright(0.0), np.zeros(2), on_feet=True)
+    held = np.hypot(*r.evidence)
+    r.decide(upright(0.0), np.zeros(2), on_feet=False)
+    assert held == pytest.approx(5.0) and np.hypot(*r.evidence) == pytest.approx(2.5)
 
 
 def test_activity_weights_silence_the_cue_where_it_is_not_trusted():

@@ -78,3 +78,18 @@ def test_templates_give_states_home_assistant_accepts():
     for state in RUNTIME_STATES:
         assert render(configs["runtime_state"]["value_template"], {**info, "state": state}) in configs["runtime_state"]["options"]
     assert configs["board"]["payload_on"] == "online" and configs["board"]["state_topic"] == t.board
+
+
+def test_an_entity_added_elsewhere_gets_the_same_conventions():
+    """edge.ha_discovery.entity_config is how another part (e.g. fall events) adds an entity: it validates too."""
+    from edge.ha_discovery import carpet_availability, entity_config
+
+    t = DeviceTopics("cavatar", "c1")
+    topic, payload = entity_config(t, "binary_sensor", "person_down", {
+        "state_topic": f"{t.base}/events", **carpet_availability(t), "name": "Person down", "device_class": "problem",
+        "value_template": "{{ 'ON' if value_json.active else 'OFF' }}", "payload_on": "ON", "payload_off": "OFF"},
+        sw_version="1.2.3")
+    assert topic == "homeassistant/binary_sensor/c1_person_down/config"
+    assert not list(validator("binary_sensor").iter_errors(payload))
+    assert payload["device"] == dict(t.ha_discovery(sw_version="1.2.3"))[
+        "homeassistant/binary_sensor/c1_presence/config"]["device"]  # one device in Home Assistant
