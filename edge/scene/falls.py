@@ -37,7 +37,6 @@ import numpy as np
 EVENT_TYPES = ("fall", "person_down")
 EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
 EXERCISE_AREA_FRACTION = 0.05  # ... or its contact area changes by more than this fraction
-EXERCISE_RATE_HZ = 14.0  # frames are counted as 1/14 s each towards exercise_s
 STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
 
 
@@ -256,7 +255,7 @@ class FallDetector:
             moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
                       or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
             if moving and any(activities.get(k) in c.exercise_activities for k in b.track_ids):
-                ep.exercise_s += 1.0 / EXERCISE_RATE_HZ  # the model says exercise AND the body moves
+                ep.exercise_s += min(max(t_s - ep.last_t, 0.0), 0.25)  # the model says exercise AND the body moves
                 ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
             ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
             ep.track_ids |= set(b.track_ids)
