@@ -17,6 +17,7 @@ import numpy as np
 from edge.infer.heading import resolve_sequence, sequence_cues
 from edge.infer.normalise import center_of_pressure_m, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
+from export import metrics
 from export.data import Track, corrupt
 
 Encode = Callable[[np.ndarray], np.ndarray]
@@ -91,7 +92,7 @@ def track_metrics(tracks: list[Track], encode: Encode, head: Head, window: int, 
         frames, out = predict_track(tr, encode, head, window, pitch_m, seed + i, frame_stride)
         joints = body.forward(out["pose_aa"], out["betas"])["joints"]
         gt = tr.joints_m[frames]
-        err.append(np.linalg.norm((joints - joints[:, :1]) - (gt - gt[:, :1]), axis=-1).mean(-1))
+        err.append(metrics.mpjpe(joints, gt))
         terr.append(np.linalg.norm(out["transl_m"] - tr.transl_m[frames], axis=-1))
         acc.append(np.argmax(out["activity_logits"], -1) == tr.activity[frames])
     err, terr, acc = np.concatenate(err), np.concatenate(terr), np.concatenate(acc)
