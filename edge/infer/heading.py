@@ -53,6 +53,11 @@ class HeadingParams:
     max_evidence: float = 30.0       # its length is clipped to this
     min_evidence: float = 0.5        # shorter evidence decides nothing
     hold_last: float = 0.0           # 1: without evidence, keep the yaw published last (0: the model's)
+    max_plateau_share: float = 1.0   # a blob with more of its sensels at its own peak is saturated: no vote
+    outline: float = 0.0             # 1: a foot votes by its outline, not its CoP (see foot_votes) …
+    min_skew: float = 0.1            # … when its sensels' skewness along the long axis is at least this
+    confirm_flip_frames: float = 0.0  # without evidence, a 180° jump of the model is published only after
+                                     # it has lasted this many frames (0: at once)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "HeadingParams":
@@ -118,6 +123,8 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
     starts = np.searchsorted(lab[order], np.arange(1, n + 1))
     sums = np.add.reduceat(np.stack([np.ones_like(x), x, y, x * x, y * y, x * y, w, w * x, w * y], -1)[order], starts)
     count, sx, sy, sxx, syy, sxy, force, swx, swy = sums.T
+    peak = ndimage.maximum(p[box], labels, np.arange(1, n + 1))
+    at_peak = np.bincount(lab, weights=w >= 0.98 * peak[lab - 1], minlength=n + 1)[1:]
     mx, my = sx / count, sy / count
     dof = np.maximum(count - 1, 1)
     sxx, syy, sxy = (sxx - count * mx * mx) / dof, (syy - count * my * my) / dof, (sxy - count * mx * my) / dof
@@ -132,8 +139,16 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
     phi = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the major axis
     axis = np.stack([np.cos(phi), np.sin(phi)], -1)
     cop = np.stack([swx, swy], -1) / force[:, None]
+    if params.outline:  # the wide forefoot holds most sensels, the narrow heel trails: skewness < 0 toward the toes
+        t = (x - mx[lab - 1]) * axis[lab - 1, 0] + (y - my[lab - 1]) * axis[lab - 1, 1]
+        m2 = np.bincount(lab, weights=t * t, minlength=n + 1)[1:] / count
+        m3 = np.bincount(lab, weights=t ** 3, minlength=n + 1)[1:] / count
+        skew = m3 / np.maximum(m2, 1e-12) ** 1.5
+        vote = foot & (np.abs(skew) >= params.min_skew)
+        return -np.sign(skew[vote])[:, None] * axis[vote], share
     offset_mm = ((np.stack([mx, my], -1) - cop) * axis).sum(-1) * pitch_m * 1e3  # > 0: the toes lie along +axis
     vote = foot & (np.abs(offset_mm) >= params.min_offset_mm) & (np.abs(offset_mm) <= params.max_offset_mm)
+    vote &= at_peak <= params.max_plateau_share * count  # a saturated blob's CoP says nothing of its heel
     return np.sign(offset_mm[vote])[:, None] * axis[vote], share
 
 
@@ -197,7 +212,8 @@ class HeadingResolver:
     While the evidence is at least ``min_evidence`` long, a pose whose yaw is more than 90° from
     it is published turned by Rz(π); the model's yaw (which may drift or swing on its own) keeps
     all its precision otherwise. Without enough evidence the model's answer is published, or,
-    with ``hold_last`` = 1, the half turn nearest to the yaw published last (no 180° jumps).
+    with ``hold_last`` = 1, the half turn nearest to the yaw published last (no 180° jumps), or with
+    ``confirm_flip_frames`` = N, that half turn until the model has held the other for N frames.
     """
 
     def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None) -> None:
@@ -206,6 +222,7 @@ class HeadingResolver:
         self.evidence = np.zeros(2)
         self.last_yaw: float | None = None
         self.flips = 0  # frames published turned
+        self.pending = 0  # frames the model has stood a half turn from the published yaw (confirm_flip_frames)
 
     def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
                 activity_probs: np.ndarray | None = None) -> np.ndarray:
@@ -227,13 +244,28 @@ class HeadingResolver:
             e, length = e * (p.max_evidence / length), p.max_evidence
         self.evidence = e
         yaw = float(yaw_rad(np.asarray(pose_aa[:3])))
-        ref = cue_yaw_rad(e) if length >= p.min_evidence else (self.last_yaw if p.hold_last else None)
+        ref = cue_yaw_rad(e) if length >= p.min_evidence else self._without_evidence(yaw)
         out = np.asarray(pose_aa)
         if ref is not None and abs(_wrap(yaw - ref)) > np.pi / 2:
             out, yaw = turn_half(out), float(_wrap(yaw + np.pi))
             self.flips += 1
         self.last_yaw = yaw
         return out
+
+    def _without_evidence(self, yaw: float) -> float | None:
+        """The reference yaw when the feet say nothing: the yaw published last with ``hold_last``; with
+        ``confirm_flip_frames`` the same until the model's half turn has lasted that many frames (a
+        real turn is gradual; a 180° jump between frames is the model's ambiguity, not the person)."""
+        p = self.params
+        if self.last_yaw is None or p.hold_last:
+            return self.last_yaw
+        if not p.confirm_flip_frames:
+            return None
+        self.pending = self.pending + 1 if abs(_wrap(yaw - self.last_yaw)) > np.pi / 2 else 0
+        if self.pending >= p.confirm_flip_frames:
+            self.pending = 0
+            return None
+        return self.last_yaw
 
 
 def sequence_cues(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, np.ndarray]:

@@ -183,6 +183,8 @@ class ModelSection:
                          "publisher threads need the other core)", _between(1, 64))
     resolve_heading: bool = _f(True, "turn a body the model publishes facing backwards (180° about the vertical) when "
                                      "the feet's pressure says so, per track (edge/infer/heading.py)")
+    heading_params: str = _f("", "the heading resolver's fitted parameters (JSON); empty: the shipped "
+                                 "edge/infer/heading.json")
 
 
 @dataclass(frozen=True)

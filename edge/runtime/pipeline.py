@@ -150,7 +150,8 @@ class Runtime:
             self.stages = FrameStages(calibrated, scene, self.bundle, device=cfg.device.id, times=self.times,
                                       counters=self.counters, invalid=self.invalid,
                                       heartbeat_s=cfg.runtime.heartbeat_s, seq_start=self._seq_start,
-                                      resolve_heading=cfg.model.resolve_heading)
+                                      resolve_heading=cfg.model.resolve_heading,
+                                      heading_params=cfg.model.heading_params or None)
             status = cfg.status_path()
             try:
                 status.parent.mkdir(parents=True, exist_ok=True)

@@ -139,3 +139,55 @@ def test_the_packaged_parameters_load_and_bad_files_are_one_clear_error(tmp_path
     bad.write_text(json.dumps({"params": {"decay": "fast"}}))
     with pytest.raises(ValueError, match="must be a number"):
         HeadingParams.load(bad)
+
+
+def outline_feet(toes: str, kpa: float = 14.0) -> np.ndarray:
+    """(96,96) two saturated feet (every sensel at ``kpa``: no CoP offset at all) whose forefoot is
+    7 sensels wide and heel 3, toes toward −y ("up") or +y ("down")."""
+    foot = np.zeros((14, 7), np.float32)
+    foot[:8] = kpa           # forefoot: rows 0–7, full width
+    foot[8:, 2:5] = kpa      # heel: rows 8–13, narrow
+    if toes == "down":
+        foot = foot[::-1]
+    p = np.zeros((96, 96), np.float32)
+    for c0 in (40, 50):
+        p[40:54, c0:c0 + 7] = foot
+    return p
+
+
+def test_a_saturated_foot_points_to_its_toes_by_its_outline():
+    cop = HeadingParams()
+    outline = HeadingParams(outline=1.0, min_skew=0.05)
+    for toes, sign in (("up", -1.0), ("down", 1.0)):
+        p = outline_feet(toes)
+        assert not frame_cue(p, PITCH, cop)[0].any()  # flat pressure: the CoP cue has nothing to say
+        cue, on_feet = frame_cue(p, PITCH, outline)
+        assert on_feet and np.sign(cue[1]) == sign and abs(cue[0]) < 1e-6 * abs(cue[1]) + 1e-9
+    # a symmetric blob (no wide end) gives no vote
+    ellipse = np.zeros((96, 96), np.float32)
+    ellipse[40:54, 40:45] = 14.0
+    assert not frame_cue(ellipse, PITCH, outline)[0].any()
+
+
+def test_a_saturated_blob_gives_no_cop_vote():
+    heel_heavy = feet("up")
+    params = HeadingParams(max_plateau_share=0.15)
+    assert frame_cue(heel_heavy, PITCH, params)[0].any()
+    assert not frame_cue(np.minimum(heel_heavy, 7.0), PITCH, params)[0].any()  # half the foot at the clip level
+
+
+def test_a_half_turn_of_the_model_is_published_only_once_it_lasts():
+    r = HeadingResolver(HeadingParams(confirm_flip_frames=5))
+    assert yaw_rad(r.decide(upright(0.2), np.zeros(2))[:3]) == pytest.approx(0.2, abs=1e-5)
+    for _ in range(4):  # the model swings round for four frames: held
+        out = r.decide(upright(0.2 + np.pi), np.zeros(2))
+        assert yaw_rad(out[:3]) == pytest.approx(0.2, abs=1e-5)
+    assert yaw_rad(r.decide(upright(0.2), np.zeros(2))[:3]) == pytest.approx(0.2, abs=1e-5)  # and back: nothing shown
+    for k in range(5):  # now it keeps the other answer: published on the fifth frame
+        out = r.decide(upright(0.2 + np.pi), np.zeros(2))
+    assert abs(abs(yaw_rad(out[:3]) - 0.2) - np.pi) < 1e-4
+    # a gradual turn is followed frame by frame, never held
+    r = HeadingResolver(HeadingParams(confirm_flip_frames=5))
+    for yaw in np.linspace(0, np.pi, 20):
+        out = r.decide(upright(yaw), np.zeros(2))
+        assert abs(((yaw_rad(out[:3]) - yaw) + np.pi) % (2 * np.pi) - np.pi) < 1e-4
