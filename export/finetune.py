@@ -35,14 +35,16 @@ def track_slice(t: Track, start: int, stop: int) -> Track:
     return t.slice(start, stop)
 
 
-def user_tracks(data: str | Path, split: str = "all", subjects: list[str] | None = None) -> tuple[list[Track], float, Any]:
-    """Tracks of ``split`` ("all" for every split: a new user's own recording) of the chosen subjects."""
+def user_tracks(data: str | Path, split: str = "all", subjects: list[str] | None = None,
+                board: bool = False) -> tuple[list[Track], float, Any]:
+    """Tracks of ``split`` ("all" for every split: a new user's own recording) of the chosen subjects;
+    ``board``: their input on the board's path (export.data.load_tracks)."""
     from export.data import load_tracks
     from sim.dataset import Dataset
 
     ds = Dataset(data)
     splits = ("train", "val", "test") if split == "all" else (split,)
-    tracks = [t for s in splits for t in load_tracks(ds, s)]
+    tracks = [t for s in splits for t in load_tracks(ds, s, board=board)]
     if subjects:
         ids = {int(s.lstrip("s")) for s in subjects}
         tracks = [t for t in tracks if t.subject in ids]

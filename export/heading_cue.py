@@ -1,6 +1,6 @@
 """Fit the foot-shape heading cue (edge/infer/heading.py) offline and write its parameters.
 
-    python -m export.heading_cue --bundle edge/models/lean-96 --data DATASET [--split all] \
+    python -m export.heading_cue --bundle edge/models/lean-96 --data DATASET [--split all] [--board] \
         [--out edge/infer/heading.json]
 
 Runs the bundle over every track of the dataset (inputs through the training corruption, as
@@ -33,19 +33,39 @@ GRID = {
     "hold_last": (0.0,),
     "off_feet_decay": (0.97, 0.9, 0.8),
 }
+# On the board's path the carpet saturates (15–30 kPa) and the model's input is clipped at 14 kPa, so a
+# foot's CoP says little: its outline votes instead, and a model's sudden half turn waits for confirmation.
+GRID_BOARD = {
+    "outline": (1.0,),
+    "min_skew": (0.05, 0.1),
+    "decay": (0.97, 0.99),
+    "max_evidence": (30.0,),
+    "min_evidence": (0.5, 1.5),
+    "off_feet_decay": (0.97, 0.8),
+    "confirm_flip_frames": (0.0, 14.0),
+}
 
 
-def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: int = 0,
+                board: bool = False) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per track: ((L,72) predicted pose_aa, (L,H,W) float32 inputs in kPa as the model saw them,
-    (L,A) predicted activity probabilities)."""
+    (L,A) predicted activity probabilities). ``board``: the tracks hold the board's kPa, which the
+    runtime only floors and clips (edge.runtime.model_input); otherwise the training corruption."""
+    from edge.infer import verify
+    from edge.runtime.model_input import input_limits, person_pressure_kpa
     from export.bundle import bundle_callables
     from export.data import corrupt
     from export.evaluate import predict
 
     encode, head, window = bundle_callables(bundle)
+    floor, sat = input_limits(verify(bundle))
     out = []
     for i, tr in enumerate(tracks):
-        p = corrupt(tr.pressure_kpa.astype(np.float32), np.random.default_rng(seed + i)).numpy()
+        if board:
+            kpa = tr.pressure_kpa.astype(np.float32)
+            p = person_pressure_kpa(kpa, np.ones(kpa.shape, bool), floor, sat)
+        else:
+            p = corrupt(tr.pressure_kpa.astype(np.float32), np.random.default_rng(seed + i)).numpy()
         from edge.infer.normalise import normalise_kpa
 
         pred = predict(normalise_kpa(p)[:, None], encode, head, window)
@@ -86,7 +106,8 @@ def fit(tracks: list[Track], preds: list, pitch_m: float, names: list[str], grid
     base = base or HeadingParams()
     tried, cue_cache = [], {}
     keys = list(grid)
-    cue_keys = ("floor_kpa", "min_elongation", "min_offset_mm", "max_offset_mm", "min_foot_share")
+    cue_keys = ("floor_kpa", "min_elongation", "min_offset_mm", "max_offset_mm", "min_foot_share", "outline",
+                "min_skew", "max_plateau_share")
     for values in itertools.product(*(grid[k] for k in keys)):
         params = replace(base, **dict(zip(keys, values)))
         ck = tuple(getattr(params, k) for k in cue_keys)
@@ -108,12 +129,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--split", default="all", choices=("test", "val", "train", "all"))
     ap.add_argument("--max-tracks", type=int, default=0, help="first N tracks only (0: all)")
     ap.add_argument("--out", default=str(PARAMS_FILE), help=f"parameters JSON (default {PARAMS_FILE})")
+    ap.add_argument("--board", action="store_true",
+                    help="fit on the board's path: the dataset's raw counts through its calibrations (generated with "
+                    "`cavatar sim generate --calibration installer`), as the runtime sees them")
     args = ap.parse_args(argv)
     from export.finetune import user_tracks
     from sim.dataset import DatasetError
 
+    grid = GRID_BOARD if args.board else GRID
     try:
-        tracks, pitch, ds = user_tracks(args.data, args.split)
+        tracks, pitch, ds = user_tracks(args.data, args.split, board=args.board)
     except (DatasetError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -122,15 +147,16 @@ def main(argv: list[str] | None = None) -> int:
     from edge.infer import verify
 
     names = list(verify(args.bundle)["activities"])
-    preds = predictions(tracks, args.bundle, pitch)
+    preds = predictions(tracks, args.bundle, pitch, board=args.board)
     before = wrong_share([p for p, _, _ in preds], tracks)
-    params, weights, tried = fit(tracks, preds, pitch, names)
+    params, weights, tried = fit(tracks, preds, pitch, names, grid)
     after = min(r["wrong_90"] for r in tried)
     result = {"params": params.to_dict(), "activity_weight": weights,
               "fit": {"bundle": str(args.bundle), "data": str(args.data), "dataset_settings": ds.manifest.get("settings"),
-                      "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split, "tracks": len(tracks),
+                      "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split, "input": "board" if args.board else "clean",
+                      "tracks": len(tracks),
                       "frames": int(sum(len(t) for t in tracks)), "wrong_90_model": before, "wrong_90_resolved": after,
-                      "grid": {k: list(v) for k, v in GRID.items()}}}
+                      "grid": {k: list(v) for k, v in grid.items()}}}
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
     print(f"heading >90° off: model {100 * before:.1f} % → resolved {100 * after:.1f} % of {result['fit']['frames']} frames; wrote {args.out}")
     return 0
