@@ -43,6 +43,7 @@ GRID_BOARD = {
     "min_evidence": (0.5, 1.5),
     "off_feet_decay": (0.97, 0.8),
     "confirm_flip_frames": (0.0, 14.0),
+    "min_upright": (-1.0, 0.5),
 }
 
 

@@ -56,6 +56,8 @@ class HeadingParams:
     max_plateau_share: float = 1.0   # a blob with more of its sensels at its own peak is saturated: no vote
     outline: float = 0.0             # 1: a foot votes by its outline, not its CoP (see foot_votes) …
     min_skew: float = 0.1            # … when its sensels' skewness along the long axis is at least this
+    min_upright: float = -1.0        # turn only a body whose up axis has at least this carpet-z component
+                                     # (the feet say where an upright body faces, not a lying one)
     confirm_flip_frames: float = 0.0  # without evidence, a 180° jump of the model is published only after
                                      # it has lasted this many frames (0: at once)
 
@@ -178,6 +180,14 @@ def yaw_rad(orient_aa: np.ndarray) -> np.ndarray:
     return _wrap(2 * np.arctan2(v[..., 1] + v[..., 2], w + v[..., 0]))
 
 
+def upright_z(orient_aa: np.ndarray) -> float:
+    """(3,) global orientation → the carpet-z component of the body's up axis (canonical +y): 1 upright,
+    0 lying, −1 upside down."""
+    w, v = _quaternion(orient_aa)
+    x, y, z = v  # the third row of R applied to (0, 1, 0): 2(yz + wx)
+    return float(2 * (y * z + w * x))
+
+
 def cue_yaw_rad(forward_xy: np.ndarray) -> float:
     """(2,) a forward vector on the carpet → the yaw of an upright body facing it."""
     return float(_wrap(np.arctan2(forward_xy[1], forward_xy[0]) + np.pi / 2))
@@ -246,6 +256,8 @@ class HeadingResolver:
         yaw = float(yaw_rad(np.asarray(pose_aa[:3])))
         ref = cue_yaw_rad(e) if length >= p.min_evidence else self._without_evidence(yaw)
         out = np.asarray(pose_aa)
+        if ref is not None and upright_z(out[:3]) < p.min_upright:
+            ref = None
         if ref is not None and abs(_wrap(yaw - ref)) > np.pi / 2:
             out, yaw = turn_half(out), float(_wrap(yaw + np.pi))
             self.flips += 1
@@ -284,4 +296,4 @@ def resolve_sequence(pose_aa: np.ndarray, cues: tuple[np.ndarray, np.ndarray], a
     return np.stack([r.decide(pose_aa[t], cue[t], probs[t], bool(on_feet[t])) for t in range(len(pose_aa))]).astype(np.float32)
 
 
-__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "yaw_rad"]
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "upright_z", "yaw_rad"]

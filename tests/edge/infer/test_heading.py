@@ -191,3 +191,15 @@ def test_a_half_turn_of_the_model_is_published_only_once_it_lasts():
     for yaw in np.linspace(0, np.pi, 20):
         out = r.decide(upright(yaw), np.zeros(2))
         assert abs(((yaw_rad(out[:3]) - yaw) + np.pi) % (2 * np.pi) - np.pi) < 1e-4
+
+
+def test_a_lying_body_is_not_turned_by_the_feet():
+    lying = upright(np.pi)
+    lying[:3] = (Rotation.from_rotvec([0, 0, np.pi]) * Rotation.from_rotvec([0.1, 0, 0])).as_rotvec()  # supine-ish
+    for gate, turned in ((0.5, False), (-1.0, True)):
+        r = HeadingResolver(HeadingParams(min_evidence=0.3, min_upright=gate))
+        for _ in range(5):
+            r.resolve(upright(0.0), feet("up"), PITCH)  # evidence: facing yaw 0
+        out = r.decide(lying, np.zeros(2), on_feet=False)
+        assert (r.flips == 1) == turned
+        assert np.allclose(out[:3], lying[:3]) != turned
