@@ -1,4 +1,4 @@
-"""The runtime: reader thread → pipeline thread → publisher thread, one stop event.
+"""The runtime's loop: reader thread → pipeline thread → publisher thread, one stop event; its status.
 
     rt = Runtime(load_config("cavatar.toml"))
     rt.start()                  # SetupError (bad bundle, wrong calibration, …) before any output exists
@@ -32,8 +32,9 @@ from typing import Any, Callable
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
 from edge.runtime.sd_notify import Notifier
-from edge.runtime.carpet_calibration import ChosenCalibration, SetupError, check_board, choose_calibration
+from edge.runtime.carpet_calibration import ChosenCalibration, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
+from edge.runtime.errors import SetupError
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.publisher import Publisher
 from edge.runtime.stages import FrameOutcome, FrameStages
@@ -430,7 +431,7 @@ class Runtime:
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
         work = {k: c.get(k, 0) for k in WORK_COUNTERS}
-        work["tracks_open"] = len(self.stages.tracks) if self.stages else 0
+        work["tracks_open"] = self.stages.tracks_open if self.stages else 0
         work["saved"] = {"frames_without_inference": c.get("frames_empty", 0) + c.get("frames_unconfirmed", 0),
                          "encoder_runs": c.get("person_frames", 0) - c.get("encoder_runs", 0),
                          "head_runs": c.get("person_frames", 0) - c.get("head_runs", 0)}
@@ -528,4 +529,4 @@ class Runtime:
         }
 
 
-__all__ = ["Runtime", "SetupError"]
+__all__ = ["Runtime"]
