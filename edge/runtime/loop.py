@@ -27,7 +27,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
@@ -40,6 +40,12 @@ from edge.runtime.publisher import Publisher
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
 
+if TYPE_CHECKING:
+    from calibration.file import Calibration
+    from edge.infer.bundle import ModelBundle
+    from edge.runtime.events import EventStage
+    from edge.runtime.seq import SeqLedger
+
 log = logging.getLogger(__name__)
 
 
@@ -48,9 +54,9 @@ def _stderr(text: str) -> None:
 
 
 class Runtime:
-    def __init__(self, config: RuntimeConfig, *, source: Any = None, sinks: list | None = None, bundle: Any = None,
-                 calibration: Any = None, clock: Callable[[], float] = time.time,
-                 say: Callable[[str], None] = _stderr) -> None:
+    def __init__(self, config: RuntimeConfig, *, source: Any = None, sinks: list | None = None,
+                 bundle: ModelBundle | None = None, calibration: Calibration | None = None,
+                 clock: Callable[[], float] = time.time, say: Callable[[str], None] = _stderr) -> None:
         self.config = config
         self.clock = clock
         self.say = say
@@ -62,13 +68,13 @@ class Runtime:
         self.end_reason: str | None = None
         self.source: Any = source
         self.sinks: list | None = sinks
-        self.bundle: Any = bundle
+        self.bundle: ModelBundle | None = bundle
         self.chosen: ChosenCalibration | None = (
             ChosenCalibration(calibration, Path(getattr(calibration, "path", "(given)")), False) if calibration is not None else None)
         self.stages: FrameStages | None = None
-        self.events: Any = None  # edge.runtime.events.EventStage when [events] enabled
+        self.events: EventStage | None = None  # when [events] enabled
         self.publisher: Publisher | None = None
-        self.seqs: Any = None  # edge.runtime.seq.SeqLedger while set up
+        self.seqs: SeqLedger | None = None  # while set up
         self._seq_start = 0
         self.on_outcome: list[Callable[[FrameOutcome], None]] = []  # called in the pipeline thread (tests, the demo)
         self._stop = threading.Event()
