@@ -25,12 +25,18 @@ from export.benchmark import interval_sentence  # noqa: E402  (numpy only: the s
 RESULTS = ROOT / "bench" / "results"
 README = ROOT / "README.md"
 BEGIN, END = "<!-- perf:begin -->", "<!-- perf:end -->"
-STAGES = ("decode", "calibrate", "scene", "encoder", "head", "body", "frame", "publish", "lag")
+STAGES = ("decode", "calibrate", "scene", "encoder", "head", "record", "frame", "publish", "lag")
+RENAMED = {"record": "body"}  # stage names in results written before the rename (issue 15)
 
 
 def _load(results: Path, name: str) -> dict[str, Any] | None:
     path = results / name
     return json.loads(path.read_text()) if path.is_file() else None
+
+
+def _stage(stages: dict[str, Any], name: str) -> dict[str, Any] | None:
+    """One stage's timings, found under its older name in results written before a rename."""
+    return stages.get(name) or stages.get(RENAMED.get(name, name))
 
 
 def _f(v: Any, digits: int = 2) -> str:
@@ -153,7 +159,7 @@ def runtime(rl: dict[str, Any] | None, se: dict[str, Any] | None) -> list[str]:
                   + (f" ({'met' if rl['passed'] else 'NOT met'})" if "passed" in rl else "") + ".", ""]
         head = " | ".join(f"{r.get('people')} {'person' if r.get('people') == 1 else 'people'}: median / p99 ms" for r in scenes)
         lines += [f"| stage | {head} |", "|---" * (len(scenes) + 1) + "|"]
-        rows = [(k, [r["stages"].get(k) for r in scenes]) for k in STAGES if any(k in r["stages"] for r in scenes)]
+        rows = [(k, [_stage(r["stages"], k) for r in scenes]) for k in STAGES if any(_stage(r["stages"], k) for r in scenes)]
         rows.append(("frame total", [r.get("frame_total") for r in scenes]))
         for name, cells in rows:
             lines.append(f"| {name} | " + " | ".join(f"{_f(c.get('median_ms'), 3)} / {_f(c.get('p99_ms'), 3)}" if c else "—"
@@ -164,8 +170,8 @@ def runtime(rl: dict[str, Any] | None, se: dict[str, Any] | None) -> list[str]:
         lines += ["`bench/results/runtime_latency.json` is absent: FrameStages on the simulated day of bench/speed_error.py, "
                   "scene-adaptive (decoding and publishing not included); model stages over the frames that ran them.", "",
                   "| stage | median ms | p99 ms |", "|---|---|---|"]
-        lines += [f"| {k} | {_f(stages[k].get('median_ms'), 3)} | {_f(stages[k].get('p99_ms'), 3)} |" for k in STAGES
-                  if k in stages and stages[k].get("median_ms") is not None]
+        lines += [f"| {k} | {_f(_stage(stages, k)['median_ms'], 3)} | {_f(_stage(stages, k)['p99_ms'], 3)} |" for k in STAGES
+                  if (_stage(stages, k) or {}).get("median_ms") is not None]
         return lines + ["", measured_on(se)]
     return lines + ["*Not measured yet: neither `bench/results/runtime_latency.json` nor `bench/results/speed_error.json` "
                     "is present (`python bench/runtime_latency.py` writes the first).*"]

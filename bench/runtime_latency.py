@@ -1,5 +1,5 @@
 """Per-frame latency of the runtime by stage, on ONE thread, for the shipped model bundle:
-decode, calibrate, scene, encoder, head, body, publish, and the frame total against the
+decode, calibrate, scene, encoder, head, record, publish, and the frame total against the
 71.4 ms frame interval at 14 Hz. Writes bench/results/runtime_latency.json.
 
     OMP_NUM_THREADS=1 python bench/runtime_latency.py [--bundle DIR] [--frames 420]
@@ -8,13 +8,13 @@ Frames come from recordings, so the simulator's cost is not measured: ``sim://?p
 (P = 1 and 2) is recorded once into a capture file through the real protocol (as `cavatar
 record` does); decode is the runtime's own instrumentation (TimedCarpetSource: protocol decoding
 + frame assembly per frame) replaying those bytes; then every frame goes through the runtime's
-FrameStages (calibrate → scene → encoder → head → body, the calibration the seed-7 virtual
+FrameStages (calibrate → scene → encoder → head → record, the calibration the seed-7 virtual
 carpet's true one) and each record is handed to a JSON-lines sink (publish), all in this one
 thread; onnxruntime with one intra-op thread (the runtime's default, ``[model] threads``), no
 spinning. The recording is run once untimed (warm-up), then timed on fresh state. encoder and
 head are per frame that ran them (one batched call for all people whose pressure changed; a
 still person reuses their result, so some frames run neither); the frame total is per frame:
-decode + the pipeline (calibrate … body, as the runtime's "frame" stage: it also holds the
+decode + the pipeline (calibrate … record, as the runtime's "frame" stage: it also holds the
 model-input preparation and track book-keeping, "pipeline_other") + publish.
 
 The reader and publisher are threads in `cavatar run`; on a 2-core board they overlap the
@@ -48,7 +48,7 @@ SEED = 7
 RATE_HZ = 14.0
 INTERVAL_MS = 1000.0 / RATE_HZ
 GOAL_RTF, GOAL_MS_ONE_PERSON = 10.0, 7.0
-STAGES = ("decode", "calibrate", "scene", "encoder", "head", "body", "publish")
+STAGES = ("decode", "calibrate", "scene", "encoder", "head", "record", "publish")
 
 
 class FrameClock:
@@ -160,7 +160,7 @@ def measure(people: int, frames_n: int, bundle: Any, calibration: Any, tmp: Path
         "people": people, "source": f"sim://?people={people}&seed={SEED} recorded, {len(frames)} frames, "
                                     f"{capture.stat().st_size} bytes",
         "stages": {s: stats([f[s] for f in per if s in f]) for s in STAGES},
-        "pipeline_calibrate_to_body": stats([f["frame"] for f in per]),
+        "pipeline_calibrate_to_record": stats([f["frame"] for f in per]),
         "pipeline_other": stats([f["frame"] - sum(f.get(s, 0.0) for s in STAGES[1:6]) for f in per]),
         "frame_total": stats(totals), "frame_total_frames_with_people": stats(with_people),
         "interval_ms": round(INTERVAL_MS, 2),

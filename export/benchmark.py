@@ -157,7 +157,7 @@ def pareto_front(points: list[tuple[float, float]]) -> list[int]:
 def person_frames(grid: tuple[int, int], pitch_m: float, n: int = 32, seed: int = 0) -> tuple[np.ndarray, str]:
     """(n,1,H,W) normalised model inputs of one simulated moving person on this carpet, and what they are."""
     from edge.infer.normalise import normalise_kpa
-    from edge.runtime.model_input import person_pressure_kpa
+    from edge.infer.model_input import person_pressure_kpa
 
     try:
         from sim.live import LiveCarpet
@@ -595,7 +595,7 @@ def ratio_scene_adaptive(bundle_dir: Path, day: Day, rounds: int) -> tuple[dict[
 
 def runtime_vs_interval(adaptive: dict[str, Any], runtime_latency: str | None) -> dict[str, Any]:
     """Per-frame runtime cost / the 71.4 ms frame interval at 14 Hz: bench/runtime_latency.py's results when present
-    (its "frame_total" per scene: decode + calibrate … body + publish, one thread), else the adaptive day's."""
+    (its "frame_total" per scene: decode + calibrate … record + publish, one thread), else the adaptive day's."""
     interval = 1e3 / RATE_HZ
     if runtime_latency and Path(runtime_latency).is_file():
         rl = json.loads(Path(runtime_latency).read_text())
@@ -606,7 +606,7 @@ def runtime_vs_interval(adaptive: dict[str, Any], runtime_latency: str | None) -
                      "fraction_p99": r["frame_total"]["p99_ms"] / interval if r["frame_total"].get("p99_ms") else None}
                     for r in scenes]
             worst = max(rows, key=lambda r: r["frame_median_ms"])
-            return {"what": "runtime per-frame cost (decode + calibrate … body + publish, one thread; bench/runtime_latency.py) "
+            return {"what": "runtime per-frame cost (decode + calibrate … record + publish, one thread; bench/runtime_latency.py) "
                             "/ frame interval; the headline is its slowest scene",
                     "source": f"{runtime_latency}: `{rl.get('command', 'command not recorded')}` at git "
                               f"{str(rl.get('git_revision', 'unknown'))[:12]}",
@@ -616,7 +616,7 @@ def runtime_vs_interval(adaptive: dict[str, Any], runtime_latency: str | None) -
     passes, n = adaptive["passes"], adaptive["frames"]
     every = np.concatenate([p["values"]["frame"] for p in passes])
     stages = {}
-    for stage in ("calibrate", "scene", "encoder", "head", "body", "frame"):
+    for stage in ("calibrate", "scene", "encoder", "head", "record", "frame"):
         vals = [np.asarray(p["values"].get(stage, []), float) for p in passes]
         allv = np.concatenate(vals)
         stages[stage] = {"median_ms": float(np.median(allv)) if allv.size else None,

@@ -21,10 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from calibration.file import Calibration, CalibrationError
-
-
-class SetupError(Exception):
-    """The runtime cannot start; the message says what is wrong and how to fix it (exit 2)."""
+from edge.runtime.errors import SetupError
 
 
 @dataclass

@@ -1,6 +1,7 @@
-"""Health counters of the runtime: event counts and per-stage milliseconds over a rolling window.
+"""Health of the runtime: per-stage milliseconds over a rolling window, and the names of what it counts
+(the counts themselves are :class:`edge.counters.Counters`, re-exported here).
 
-Written by three threads (reader: decode; pipeline: calibrate … body; publisher: publish,
+Written by three threads (reader: decode; pipeline: calibrate … record; publisher: publish,
 lag), read by the status writer; every method takes the one lock.
 
 Stages (milliseconds per frame unless said otherwise):
@@ -9,7 +10,7 @@ Stages (milliseconds per frame unless said otherwise):
   scene      filters, contacts, people, tracking (SceneTracker)
   encoder    one batched encoder call (all people whose pressure changed), per frame that ran it
   head       one batched head call, per frame that ran it
-  body       head outputs → published parameters (activity, checks, rounding: make_person/make_record)
+  record     head outputs → the published record (activity, checks, rounding: make_person/make_record)
   frame      the whole pipeline for one frame (calibrate → record queued)
   publish    handing one record to every sink (publisher thread)
   lag        frame complete (reader) → handed to the sinks, per record
@@ -23,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
-STAGES = ("decode", "calibrate", "scene", "encoder", "head", "body", "frame", "events", "publish", "lag")
+from edge.counters import Counters
+
+STAGES = ("decode", "calibrate", "scene", "encoder", "head", "record", "frame", "events", "publish", "lag")
 
 
 class StageTimes:
@@ -56,30 +59,6 @@ class StageTimes:
             else:
                 out[stage] = {"median_ms": None, "p99_ms": None, "n": 0}
         return out
-
-
-class Counters:
-    """Named event counts (thread-safe)."""
-
-    def __init__(self, names: tuple[str, ...] = ()) -> None:
-        self._lock = threading.Lock()
-        self._values: dict[str, int] = dict.fromkeys(names, 0)
-
-    def add(self, name: str, n: int = 1) -> None:
-        with self._lock:
-            self._values[name] = self._values.get(name, 0) + n
-
-    def set(self, name: str, value: int) -> None:
-        with self._lock:
-            self._values[name] = value
-
-    def get(self, name: str) -> int:
-        with self._lock:
-            return self._values.get(name, 0)
-
-    def snapshot(self) -> dict[str, int]:
-        with self._lock:
-            return dict(self._values)
 
 
 # What the pipeline counts (all start at 0, so the status file always shows every one).

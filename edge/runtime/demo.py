@@ -40,7 +40,7 @@ def demo_config(out_dir: Path, seconds: float, people: int, seed: int) -> Runtim
 def run(out_dir: Path, seconds: float = 20.0, people: int = 2, seed: int = 7) -> tuple[int, dict, dict[int, int]]:
     """Run the runtime; returns (exit code, final status, seq → simulator frame)."""
     from edge.cli.run import serve
-    from edge.runtime.pipeline import Runtime
+    from edge.runtime.loop import Runtime
 
     out_dir.mkdir(parents=True, exist_ok=True)
     for old in [*out_dir.glob("bodies*.jsonl"), out_dir / "bodies.info.json", out_dir / "status.json",

@@ -51,7 +51,7 @@ SERVICE_USER = "cavatar"
 SERVICE_CONFIG = "/etc/cavatar/cavatar.toml"
 SERVICE_DIRS = {"/run/cavatar": "RuntimeDirectory=cavatar", "/var/lib/cavatar": "StateDirectory=cavatar"}
 MIN_FREE_BYTES = 1_000_000_000
-RUNTIME_MODULES = ("edge.runtime.pipeline", "edge.infer", "edge.sinks.mqtt", "edge.sinks.jsonl",
+RUNTIME_MODULES = ("edge.runtime.loop", "edge.infer", "edge.sinks.mqtt", "edge.sinks.jsonl",
                    "edge.sources.serial_port", "edge.sources.usb_bulk")
 DEPENDENCIES = (("numpy", "numpy"), ("scipy", "scipy"), ("pyserial", "serial"), ("pyusb", "usb"),
                 ("smbus2", "smbus2"), ("paho-mqtt", "paho.mqtt.client"))
@@ -357,7 +357,8 @@ def _alive(pid: int) -> bool:
 
 def check_calibration(cfg: Any, board: Board | None, now: datetime) -> tuple[Any, list[Finding]]:
     from calibration.file import Calibration, CalibrationError
-    from edge.runtime.carpet_calibration import SetupError, choose_calibration, sim_calibration_path
+    from edge.runtime.carpet_calibration import choose_calibration, sim_calibration_path
+    from edge.runtime.errors import SetupError
 
     url = cfg.source.url
     path = Path(cfg.calibration.file) if cfg.calibration.file else None

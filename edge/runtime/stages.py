@@ -1,27 +1,20 @@
-"""One frame through the pipeline, synchronously: counts → kPa → scene → per-person inference → record.
+"""One frame through the runtime, synchronously: calibrate → scene → infer → record.
 
     stages = FrameStages(calibrated, scene, bundle, device="carpet-01", times=times, counters=counters)
     out = stages.process(raw_frame, temperature_c=None)
     out.record      # a cavatar.bodies/1 record to publish, a heartbeat, or None
 
-Only the work the scene needs (docs/runtime.md):
+This module only orchestrates; each stage owns its job (design.md): calibration turns counts
+into kPa, the scene finds the people and hands over what inference needs
+(:class:`edge.scene.handover.PeopleHandover`), :class:`edge.infer.PeopleInference` owns a
+person's inference (model input, feature windows, still reuse, one batched encoder and head
+call, heading), and :mod:`edge.record` builds the record. Here: what is published when
+(docs/runtime.md), the health counters and the stage timers.
 
 - invalid frame (calibration or scene refuses it): nothing published, the reason counted;
-- empty carpet, or contacts without a confirmed person yet: no inference; a heartbeat
-  record when the carpet has just become empty and then every ``heartbeat_s`` of frame time;
-- N confirmed people: one record with N people. A person whose pressure the scene calls
-  still, and who already has a result, reuses it (no encoder, no head; their last features
-  are pushed again so the window keeps one entry per frame, as in training). The others'
-  inputs go through ONE batched encoder call and ONE batched head call (one inference each);
-- a track the scene no longer holds frees its feature window.
-
-A new track's window is its first frame's features repeated (FeatureWindow, as in training),
-so the head runs from the track's first confirmed frame and its result is published at once.
-
-With ``resolve_heading`` (the default) each inferred person's global orientation goes through
-their track's :class:`edge.infer.heading.HeadingResolver`: turned 180° about the vertical when
-the feet's pressure says the model faces backwards (parameters: edge/infer/heading.json, or
-``heading_params`` — a path to another fitted file).
+- empty carpet, or contacts without a confirmed person yet: no record but a heartbeat when the
+  carpet has just become empty and then every ``heartbeat_s`` of frame time;
+- N confirmed people: one record with N people.
 """
 
 from __future__ import annotations
@@ -29,17 +22,18 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from edge.frames import RawFrame
-from edge.infer import FeatureWindow
-from edge.infer import heading as heading_cue
+from edge.infer.people import InferenceStep, PeopleInference
 from edge.record import heartbeat, make_person, make_record
 from edge.runtime.counters import Counters, StageTimes
-from edge.runtime.model_input import batch_inputs, input_limits, person_pressure_kpa
-from edge.runtime.tracks import PersonResult, TrackBook
+
+if TYPE_CHECKING:
+    from calibration.drift import Advice
+    from calibration.runtime import CalibratedFrames
+    from edge.infer.bundle import ModelBundle
+    from edge.scene.pipeline import SceneFrame, SceneTracker
 
 log = logging.getLogger(__name__)
 
@@ -56,34 +50,28 @@ class FrameOutcome:
 
 
 class FrameStages:
-    """The synchronous per-frame pipeline (no threads); :class:`edge.runtime.Runtime` drives it."""
+    """The synchronous per-frame pipeline (no threads); :class:`edge.runtime.Runtime` drives it.
 
-    def __init__(self, calibrated: Any, scene: Any, bundle: Any, *, device: str, times: StageTimes, counters: Counters,
-                 invalid: Counters | None = None, heartbeat_s: float = 1.0, seq_start: int = 0,
-                 adaptive: bool = True, resolve_heading: bool = True, heading_params: str | None = None) -> None:
-        self.calibrated, self.scene, self.bundle = calibrated, scene, bundle
-        # adaptive=False is the always-infer baseline of bench/speed_error.py: no still reuse, and the model
-        # also runs on frames with nobody (the whole carpet as one input, into a window of its own; nothing
-        # published from it). Records and heartbeats are decided as in adaptive mode.
-        self.adaptive = bool(adaptive)
-        self._idle_window = None if self.adaptive else FeatureWindow(bundle.window, bundle.features)
+    ``adaptive`` and ``resolve_heading``/``heading_params`` are :class:`PeopleInference`'s."""
+
+    def __init__(self, calibrated: CalibratedFrames, scene: SceneTracker, bundle: ModelBundle, *, device: str,
+                 times: StageTimes, counters: Counters, invalid: Counters | None = None, heartbeat_s: float = 1.0,
+                 seq_start: int = 0, adaptive: bool = True, resolve_heading: bool = True,
+                 heading_params: str | None = None) -> None:
+        self.calibrated, self.scene = calibrated, scene
+        self.infer = PeopleInference(bundle, adaptive=adaptive, resolve_heading=resolve_heading,
+                                     heading_params=heading_params)
         self.device = device
         self.model = bundle.version
-        self.activities = bundle.activities
         self.times, self.counters = times, counters
         self.invalid = invalid if invalid is not None else Counters()
         self.heartbeat_s = float(heartbeat_s)
         self.seq = int(seq_start)  # the next record's seq
-        self.resolve_heading = bool(resolve_heading)
-        heading = heading_cue.load(heading_params, self.activities) if self.resolve_heading else None
-        self._pitch_m = float(bundle.pitch_m)
-        self._input_limits = input_limits(bundle.manifest)
-        self.tracks = TrackBook(bundle.window, bundle.features, heading)
         self.people_now = 0
         self._last_heartbeat_t: float | None = None
         self._was_people = True  # so the first empty frame sends a heartbeat at once
         self._advice_said: set[str] = set()
-        self.scene_frame: Any = None  # the last frame's SceneFrame (the fall events read it)
+        self.scene_frame: SceneFrame | None = None  # the last frame's SceneFrame (the fall events read it)
 
     # ------------------------------------------------------------------ the step
     def process(self, frame: RawFrame, temperature_c: float | None = None) -> FrameOutcome:
@@ -97,107 +85,49 @@ class FrameStages:
         self._advice(cal.advice)
         if cal.rejected is not None:
             return self._refused(frame, f"calibration_{cal.rejected}")
-        masked = cal.masked if cal.masked.any() else None
-        sf = self.scene.update(cal.pressure_kpa, frame.t_s, masks=masked)
+        sf = self.scene.update(cal.pressure_kpa, frame.t_s, masks=cal.masked if cal.masked.any() else None)
         self.scene_frame = sf
-        t2 = time.perf_counter()
-        times.add("scene", (t2 - t1) * 1e3)
-        if not sf.valid:
+        times.add("scene", (time.perf_counter() - t1) * 1e3)
+        if not sf.valid or sf.handover is None:
             return self._refused(frame, f"scene_{sf.reason}")
-        freed = self.tracks.keep_only(tr.track_id for tr in self.scene.people.tracks.values() if tr.track_id is not None)
-        if freed:
-            c.add("tracks_freed", freed)
-        if not sf.people:
+        step = self.infer.step(sf.handover)
+        self._count(step)
+        if not sf.handover.people:
             c.add("frames_empty" if sf.empty else "frames_unconfirmed")
             self.people_now = 0
-            if not self.adaptive:
-                self._infer_idle(cal)
             out = FrameOutcome("empty" if sf.empty else "unconfirmed", frame, self._maybe_heartbeat(frame))
-            times.add("frame", (time.perf_counter() - t0) * 1e3)
-            return out
-        record, activities = self._people(frame, sf, cal)
-        c.add("frames_people")
-        self.people_now = len(sf.people)
-        self._was_people = True
+        else:
+            out = self._record(frame, sf, step)
         times.add("frame", (time.perf_counter() - t0) * 1e3)
-        return FrameOutcome("people", frame, record, activities)
+        return out
 
-    # ------------------------------------------------------------------ people
-    def _people(self, frame: RawFrame, sf: Any, cal: Any) -> tuple[dict, tuple[str, ...]]:
-        c, times, bundle = self.counters, self.times, self.bundle
-        states, run = [], []
-        for person in sf.people:
-            st, new = self.tracks.get(person.track_id)
-            if new:
-                c.add("tracks_started")
-            states.append(st)
-            if self.adaptive and person.still and st.result is not None:
-                st.window.push(st.result.features)  # unchanged input: the same features, no encoder
-                c.add("still_reuses")
-            else:
-                run.append((person, st))
-        c.add("person_frames", len(sf.people))
-        if run:
-            masked = cal.masked if cal.masked.any() else None
-            pressure = self.scene.filters.fill(cal.pressure_kpa, masked)  # masked sensels as the scene fills them
-            x, origins = batch_inputs(bundle, pressure, [p.mask for p, _ in run])
-            t0 = time.perf_counter()
-            feats = bundle.encode(x)
-            t1 = time.perf_counter()
-            times.add("encoder", (t1 - t0) * 1e3)
-            for (_, st), f in zip(run, feats):
-                st.window.push(f)
-            windows = np.concatenate([st.window.window() for _, st in run])
-            out = bundle.head(windows, origins)
-            poses = self._resolve_heading(pressure, run, out) if self.resolve_heading else out["pose_aa"]
-            times.add("head", (time.perf_counter() - t1) * 1e3)  # the heading resolution counts as the head's
-            c.add("encoder_runs", len(run))
-            c.add("head_runs", len(run))
-            for i, (_, st) in enumerate(run):
-                st.result = PersonResult(
-                    transl_m=out["transl_m"][i], pose_aa=poses[i], betas=out["betas"][i],
-                    confidence=float(np.clip(out["confidence"][i], 0.0, 1.0)),
-                    activity=self.activities[int(np.argmax(out["activity_probs"][i]))], features=feats[i].copy())
-        t2 = time.perf_counter()
-        people = []
-        for person, st in zip(sf.people, states):
-            r = st.result
-            st.frames += 1
-            people.append(make_person(person.track_id, r.transl_m, r.pose_aa, r.betas, r.confidence, r.activity))
+    def _record(self, frame: RawFrame, sf: SceneFrame, step: InferenceStep) -> FrameOutcome:
+        """One record with everyone's result ("record" stage: make_person/make_record, checks and rounding)."""
+        t0 = time.perf_counter()
+        people = [make_person(person.track_id, r.transl_m, r.pose_aa, r.betas, r.confidence, r.activity)
+                  for person, r in zip(sf.handover.people, step.results)]
         record = make_record(self.device, self._next_seq(), frame.host_time_s, self.model, people)
-        times.add("body", (time.perf_counter() - t2) * 1e3)
-        c.add("records")
-        return record, tuple(p["activity"] for p in people)
+        self.times.add("record", (time.perf_counter() - t0) * 1e3)
+        self.counters.add("records")
+        self.counters.add("frames_people")
+        self.people_now = len(people)
+        self._was_people = True
+        return FrameOutcome("people", frame, record, tuple(p["activity"] for p in people))
 
     # ------------------------------------------------------------------ helpers
-    def _resolve_heading(self, pressure: np.ndarray, run: list, out: dict) -> list[np.ndarray]:
-        """Each inferred person's pose_aa through their track's heading resolver; counts the turned ones."""
-        floor, sat = self._input_limits
-        poses, turned = [], 0
-        for i, (person, st) in enumerate(run):
-            kpa = person_pressure_kpa(pressure, person.mask, floor, sat)  # what the model saw
-            before = st.heading.flips
-            poses.append(st.heading.resolve(out["pose_aa"][i], kpa, self._pitch_m, out["activity_probs"][i]))
-            turned += st.heading.flips - before
-        if turned:
-            self.counters.add("heading_turned", turned)
-        return poses
+    @property
+    def tracks_open(self) -> int:
+        return self.infer.tracks_open
 
-    def _infer_idle(self, cal: Any) -> None:
-        """adaptive=False on a frame with no confirmed person: encoder + head on the whole carpet."""
-        masked = cal.masked if cal.masked.any() else None
-        pressure = self.scene.filters.fill(cal.pressure_kpa, masked)
-        x, origins = batch_inputs(self.bundle, pressure, [np.ones(pressure.shape, bool)])
-        t0 = time.perf_counter()
-        feats = self.bundle.encode(x)
-        t1 = time.perf_counter()
-        self.times.add("encoder", (t1 - t0) * 1e3)
-        self._idle_window.push(feats[0])
-        self.bundle.head(self._idle_window.window(), origins)
-        self.times.add("head", (time.perf_counter() - t1) * 1e3)
-        self.counters.add("encoder_runs")
-        self.counters.add("head_runs")
-        self.counters.add("idle_runs")
+    def _count(self, step: InferenceStep) -> None:
+        """The step's work into the health counters and its model time into the stage timers."""
+        for name, n in step.work.items():
+            if n:
+                self.counters.add(name, n)
+        if step.encoder_ms is not None:
+            self.times.add("encoder", step.encoder_ms)
+        if step.head_ms is not None:
+            self.times.add("head", step.head_ms)
 
     def _maybe_heartbeat(self, frame: RawFrame) -> dict | None:
         last = self._last_heartbeat_t
@@ -219,7 +149,7 @@ class FrameStages:
         self.seq += 1
         return seq
 
-    def _advice(self, advice: list) -> None:
+    def _advice(self, advice: list[Advice]) -> None:
         for a in advice:
             text = getattr(a, "reason", str(a))
             if text not in self._advice_said:

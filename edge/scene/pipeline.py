@@ -6,7 +6,7 @@
     elif frame.empty:     ...  # heartbeat only, no inference
     for person in frame.people:
         if person.still: ...   # reuse the last result for person.track_id
-        x = frame.pressure_kpa * person.mask   # that person's pressure only
+        x = frame.handover.filled_kpa * person.mask   # that person's pressure (edge.infer prepares it)
 
 Stages: validate → fill masked → filters → contacts → grouping → tracking → masks and
 stillness. ``last_timings_ms`` holds the cost of each stage for the last frame.
@@ -23,6 +23,7 @@ from scipy import ndimage
 from edge.scene.config import SceneConfig
 from edge.scene.contacts import detect_contacts, sensel_centres_m
 from edge.scene.filters import FilterChain
+from edge.scene.handover import PeopleHandover
 from edge.scene.people import group_blobs, prior_keys
 from edge.scene.tracking import Observation, PeopleTracker
 from edge.scene.validate import REASONS, check_frame
@@ -55,7 +56,8 @@ class PersonObservation:
 
 @dataclass(frozen=True, slots=True)
 class SceneFrame:
-    """Result of one update. pressure_kpa: the filtered frame (None when invalid or empty)."""
+    """Result of one update. pressure_kpa: the filtered frame (None when invalid or empty);
+    handover: what inference needs (edge/scene/handover.py), None when invalid."""
 
     t_s: float
     valid: bool
@@ -66,6 +68,7 @@ class SceneFrame:
     noise_kpa: float
     pressure_kpa: np.ndarray | None
     counters: dict[str, int]
+    handover: PeopleHandover | None = None
 
 
 class SceneTracker:
@@ -164,7 +167,9 @@ class SceneTracker:
         c["still"] += still
         c.update(self.people.counters)
         noise_now = float(np.mean(self._noise)) if self._noise is not None else 0.0
-        return SceneFrame(t_s, True, None, people, empty, still, noise_now, filtered, dict(c))
+        held = frozenset(tr.track_id for tr in self.people.tracks.values() if tr.track_id is not None)
+        return SceneFrame(t_s, True, None, people, empty, still, noise_now, filtered, dict(c),
+                          PeopleHandover(p, tuple(people), held))
 
     def _track(self, pre: np.ndarray, filtered: np.ndarray | None, labels: np.ndarray | None, blobs: list,
                t_s: float) -> list[PersonObservation]:

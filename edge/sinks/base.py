@@ -5,7 +5,7 @@ A sink publishes body records (never pressure). Every ``publish_bodies`` goes th
 ones :mod:`edge.record` builds; anything else (an extra ``pressure_kpa`` key, a NaN) is a
 :class:`edge.record.RecordError` and nothing is written.
 
-Counters (``stats()``): ``sent`` records delivered (QoS 0: written to the socket; QoS ≥ 1:
+Counters (``stats()``, :class:`edge.counters.Counters` and a :class:`LagWindow`): ``sent`` records delivered (QoS 0: written to the socket; QoS ≥ 1:
 acknowledged; files: written), ``dropped`` records known lost (queue full, disconnected
 QoS 0, spool overflow, write errors), ``queued`` records waiting in memory now,
 ``spooled`` records waiting on disk now, ``errors`` failures seen (connect, write),
@@ -22,11 +22,12 @@ from abc import ABC, abstractmethod
 from collections import deque
 from typing import Any, Mapping, Sequence
 
+from edge.counters import Counters
 from edge.record import RecordError, check_record, check_telemetry, dumps
 from edge.topics import EVENTS_SCHEMA
 from edge.urls import Option, parse_bool, parse_url
 
-__all__ = ["Sink", "SinkError", "Counters", "Option", "parse_bool", "parse_sink_url"]
+__all__ = ["LagWindow", "SINK_COUNTERS", "Sink", "SinkError", "Option", "parse_bool", "parse_sink_url"]
 
 
 class SinkError(Exception):
@@ -38,33 +39,26 @@ def parse_sink_url(url: str, scheme: str, form: str, options: dict[str, Option])
     return parse_url(url, scheme, form, options, kind="sink")
 
 
-class Counters:
-    """Thread-safe counters and a lag window, shared by every sink."""
+SINK_COUNTERS = ("sent", "dropped", "errors", "refused")
 
-    FIELDS = ("sent", "dropped", "errors", "refused")
 
-    def __init__(self) -> None:
+class LagWindow:
+    """Publish call → delivered, in milliseconds, over the last ``n`` records (thread-safe)."""
+
+    def __init__(self, n: int = 256) -> None:
         self._lock = threading.Lock()
-        self.values = dict.fromkeys(self.FIELDS, 0)
-        self._lags: deque[float] = deque(maxlen=256)
+        self._lags_ms: deque[float] = deque(maxlen=n)
 
-    def add(self, name: str, n: int = 1) -> None:
+    def add(self, lag_s: float) -> None:
         with self._lock:
-            self.values[name] = self.values.get(name, 0) + n
+            self._lags_ms.append(lag_s * 1000.0)
 
-    def delivered(self, lag_s: float | None = None, n: int = 1) -> None:
+    def summary(self) -> dict[str, float | None]:
+        """{"lag_ms": median, "lag_ms_max": max}, both None before the first delivery."""
         with self._lock:
-            self.values["sent"] += n
-            if lag_s is not None:
-                self._lags.append(lag_s * 1000.0)
-
-    def snapshot(self) -> dict[str, Any]:
-        with self._lock:
-            out: dict[str, Any] = dict(self.values)
-            lags = list(self._lags)
-        out["lag_ms"] = round(statistics.median(lags), 3) if lags else None
-        out["lag_ms_max"] = round(max(lags), 3) if lags else None
-        return out
+            lags = list(self._lags_ms)
+        return {"lag_ms": round(statistics.median(lags), 3) if lags else None,
+                "lag_ms_max": round(max(lags), 3) if lags else None}
 
 
 class Sink(ABC):
@@ -74,7 +68,8 @@ class Sink(ABC):
 
     def __init__(self, device: str) -> None:
         self.device = device
-        self.counters = Counters()
+        self.counters = Counters(SINK_COUNTERS)
+        self.lags = LagWindow()
         self.closed = False
 
     # -- the API the runtime uses ---------------------------------------------------------
@@ -127,12 +122,19 @@ class Sink(ABC):
         """Deliver what can be delivered within a bounded time, release everything. Idempotent."""
 
     def stats(self) -> dict[str, Any]:
-        out = self.counters.snapshot()
+        out: dict[str, Any] = dict(self.counters.snapshot())
+        out.update(self.lags.summary())
         out.update(queued=0, spooled=0)
         out.update(self._gauges())
         return out
 
     # -- for subclasses -------------------------------------------------------------------
+
+    def _count_delivered(self, lag_s: float | None = None, n: int = 1) -> None:
+        """``n`` records delivered; ``lag_s`` (publish call → delivered) joins the lag window when known."""
+        self.counters.add("sent", n)
+        if lag_s is not None:
+            self.lags.add(lag_s)
 
     @abstractmethod
     def _write_bodies(self, record: Mapping, line: str, t_call: float) -> None: ...

@@ -252,7 +252,7 @@ class JsonlSink(Sink):
                     self._writing = 0
         now = time.monotonic()
         for t in t_calls:
-            self.counters.delivered(now - t)
+            self._count_delivered(now - t)
 
     @staticmethod
     def _write_stdout(data: bytes) -> None:

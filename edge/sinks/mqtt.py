@@ -372,7 +372,7 @@ class MqttSink(Sink):
         out: dict[str, Any] = {"queued": queued, "connected": self._connected, "connects": self.connects}
         if self._spool is not None:
             out["spooled"] = len(self._spool)
-            out["dropped"] = self.counters.values["dropped"] + self._spool.dropped
+            out["dropped"] = self.counters.get("dropped") + self._spool.dropped
             out["spool_bytes"] = self._spool.size_bytes()
             out["spool_refused"] = self._spool.refused + self._spool.foreign  # lines/files there not ours: never sent
         return out
@@ -455,9 +455,9 @@ class MqttSink(Sink):
     def _delivered(self, entry: _Pending) -> None:
         """Under self._acks."""
         if entry.kind == "bodies":
-            self.counters.delivered(time.monotonic() - entry.t0)
+            self._count_delivered(time.monotonic() - entry.t0)
         elif entry.kind == "spool":
-            self.counters.delivered(None)
+            self._count_delivered(None)
             entry.seg.acked.add(entry.idx)
         elif entry.kind == "announce" and self._connected:
             self._connected_evt.set()
@@ -544,7 +544,7 @@ class MqttSink(Sink):
         self._last_refusal = ""
         self.connects += 1
         down = time.monotonic() - self._down_since if self._down_since is not None else 0.0
-        failed = self.counters.values.get("connect_failures", 0)
+        failed = self.counters.get("connect_failures")
         # WARNING, the journal's level: the first connection and every recovery are confirmed there, once each
         log.warning("mqtt:// connected to %s%s", self.config.describe(),
                     "" if self.connects == 1 and not self._failures_said else

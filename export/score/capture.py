@@ -106,7 +106,7 @@ def truth_calibration(seed: int, work: Path) -> Path:
 def capture(scene: Scene, work: Path, calibration: str = "installer", config: Any = None,
             say: Callable[[str], None] = print) -> SceneRun:
     """Run ``scene`` through the runtime and collect what was published and the truth (see the module doc)."""
-    from edge.runtime.pipeline import Runtime, SetupError
+    from edge.runtime import Runtime, SetupError
 
     work.mkdir(parents=True, exist_ok=True)
     for old in (work / f"{scene.name}.bodies.jsonl", work / f"{scene.name}.status.json"):

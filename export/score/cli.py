@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise _error(f"cannot create {folder}: {exc.strerror}; give --work/--out in a writable place") from None
-    from edge.runtime.pipeline import SetupError
+    from edge.runtime.errors import SetupError
     from export.score.session import score_scenes
 
     command = _command(args, set_name)

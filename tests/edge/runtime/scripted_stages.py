@@ -7,6 +7,7 @@ import numpy as np
 
 from edge.frames import RawFrame
 from edge.scene import PersonObservation, SceneFrame
+from edge.scene.handover import PeopleHandover
 
 H = W = 96
 
@@ -23,19 +24,17 @@ def person(track_id, mask, still):
 
 
 class ScriptedScene:
-    """Stands in for SceneTracker: per frame the scripted (people, live track ids[, empty]); empty
-    defaults to "nobody confirmed"."""
+    """Stands in for SceneTracker: per frame the scripted (people, held track ids[, empty]); empty
+    defaults to "nobody confirmed". The frame it hands over is the calibrated one (nothing masked)."""
 
     def __init__(self, script):
         self.script = list(script)
-        self.people = SimpleNamespace(tracks={})
-        self.filters = SimpleNamespace(fill=lambda p, bad: p)
 
     def update(self, pressure_kpa, t_s, masks=None):
-        people, alive, *rest = self.script.pop(0)
+        people, held, *rest = self.script.pop(0)
         empty = rest[0] if rest else not people
-        self.people.tracks = {k: SimpleNamespace(track_id=k) for k in alive}
-        return SceneFrame(t_s, True, None, people, empty, False, 0.05, pressure_kpa, {})
+        handover = PeopleHandover(pressure_kpa, tuple(people), frozenset(held))
+        return SceneFrame(t_s, True, None, people, empty, False, 0.05, pressure_kpa, {}, handover)
 
 
 class Calibrated:

@@ -41,7 +41,7 @@ def run(bundle, adaptive):
     encode = bundle.encode
     proxy = SimpleNamespace(**{k: getattr(bundle, k) for k in ("normalise", "origin_m", "head", "manifest", "window", "features")})
     proxy.encode = lambda x: (encoded.append(np.array(x)), encode(x))[1]
-    st.bundle = proxy
+    st.infer.bundle = proxy
     outs = [st.process(frame(k, p)) for k, (_, p) in enumerate(SCRIPT)]
     return outs, encoded, counters.snapshot()
 

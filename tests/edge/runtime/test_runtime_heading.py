@@ -50,7 +50,7 @@ def published_yaws(bundle, resolve: bool, frames: int = 8):
     counters = Counters(FRAME_COUNTERS + WORK_COUNTERS + PUBLISH_COUNTERS)
     st = FrameStages(Calibrated(), ScriptedScene(moving), bundle, device="carpet-01", times=StageTimes(),
                      counters=counters, resolve_heading=resolve)
-    st.bundle = SimpleNamespace(**{k: getattr(bundle, k) for k in ("normalise", "origin_m", "encode", "manifest")},
+    st.infer.bundle = SimpleNamespace(**{k: getattr(bundle, k) for k in ("normalise", "origin_m", "encode", "manifest")},
                                 head=backwards_head(bundle))
     outs = [st.process(frame(k, p)) for k in range(frames)]
     yaws = [float(yaw_rad(np.array(o.record["people"][0]["pose_aa"][:3]))) for o in outs]
@@ -59,7 +59,7 @@ def published_yaws(bundle, resolve: bool, frames: int = 8):
 
 def test_a_backwards_body_is_turned_to_face_its_toes(bundle):
     yaws, n, st = published_yaws(bundle, resolve=True)
-    assert st.resolve_heading  # the default is on: this run passed it explicitly, the next assert checks the default
+    assert st.infer.resolve_heading  # the default is on: this run passed it explicitly, the next assert checks the default
     assert FrameStages.__init__.__kwdefaults__["resolve_heading"] is True
     assert all(abs(y) < 1e-3 for y in yaws[2:])          # turned within two frames, then steady
     assert n["heading_turned"] >= len(yaws) - 2

@@ -39,7 +39,7 @@ def test_status_file_says_stopped_with_every_counter(two_people_run):
     status = read_status(out / "status.json")
     assert status["state"] == "stopped" and status["error"] is None and status["end_reason"] == "frame limit"
     assert status["frames"]["frames_in"] == 60
-    for stage in ("decode", "calibrate", "scene", "encoder", "head", "body", "frame", "publish", "lag"):
+    for stage in ("decode", "calibrate", "scene", "encoder", "head", "record", "frame", "publish", "lag"):
         assert status["stages_ms"][stage]["n"] > 0 and status["stages_ms"][stage]["median_ms"] >= 0, stage
     q = status["source"]
     assert q["queue"]["dropped_slow_consumer"] == 0  # speed=0: the sim waits for the pipeline

@@ -8,7 +8,7 @@ import pytest
 from edge.infer import ModelBundle
 from edge.runtime.config import default_bundle_path
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
-from edge.runtime.model_input import person_pressure_kpa
+from edge.infer.model_input import person_pressure_kpa
 from edge.runtime.stages import FrameStages
 from scripted_stages import H, W, Calibrated, ScriptedScene, foot, frame, person
 
@@ -27,7 +27,7 @@ def make(bundle, script, encoded):
     encode = bundle.encode
     bundle_proxy = SimpleNamespace(**{k: getattr(bundle, k) for k in ("normalise", "origin_m", "head", "manifest")})
     bundle_proxy.encode = lambda x: (encoded.append(np.array(x)), encode(x))[1]
-    st.bundle = bundle_proxy
+    st.infer.bundle = bundle_proxy
     return st, counters
 
 
@@ -51,7 +51,7 @@ def test_still_people_reuse_moving_people_run_gone_tracks_are_freed(bundle):
     assert [o.kind for o in outs] == ["people", "people", "people", "people", "empty", "empty"]
     assert [len(x) for x in encoded] == [1, 1]  # frame 0 (person 1) and frame 2 (person 2 only)
     assert (n["encoder_runs"], n["head_runs"], n["still_reuses"], n["person_frames"]) == (2, 2, 3, 5)
-    assert (n["tracks_started"], n["tracks_freed"], len(st.tracks)) == (2, 2, 0)
+    assert (n["tracks_started"], n["tracks_freed"], st.tracks_open) == (2, 2, 0)
     r0, r1, r2 = (o.record["people"] for o in outs[:3])
     assert r1 == r0  # reused exactly
     assert r2[0] == r0[0] and r2[1]["track_id"] == 2
@@ -79,7 +79,7 @@ def test_person_pressure_is_masked_floored_and_clipped_like_training():
 
 
 def test_the_translation_origin_is_the_centre_of_pressure_of_the_same_input(bundle):
-    from edge.runtime.model_input import batch_inputs
+    from edge.infer.model_input import batch_inputs
 
     p = foot(10, 40, 3.0) + foot(80, 80, 9.0)
     mask = np.zeros((H, W), bool)

@@ -37,7 +37,7 @@ def test_unplugged_board_goes_unavailable_and_presence_is_withdrawn(tmp_path, si
     broker = mqtt_broker()
     t = DeviceTopics("cavatar", "carpet-01")
     sub = subscribe(broker.port, [t.board, t.presence, t.status])
-    caplog.set_level(logging.WARNING, logger="edge.runtime.pipeline")
+    caplog.set_level(logging.WARNING, logger="edge.runtime.loop")
     with PtyBoard(premade_board(one_person_frames)) as pty:
         base = make_config(tmp_path, sim_calibration, 1, source=f"serial://{pty.port}?baud=2000000",
                            sinks=[broker.url("qos=1")], device="carpet-01").to_dict()
@@ -83,7 +83,7 @@ def test_a_board_whose_frames_all_fail_their_crc_is_lost_too_and_says_why(tmp_pa
     reason says it is the checks, not silence."""
     import threading
 
-    caplog.set_level(logging.WARNING, logger="edge.runtime.pipeline")
+    caplog.set_level(logging.WARNING, logger="edge.runtime.loop")
     with PtyBoard(premade_board(one_person_frames)) as pty:
         base = make_config(tmp_path, sim_calibration, 1, source=f"serial://{pty.port}?baud=2000000").to_dict()
         base["source"]["board_timeout_s"] = TIMEOUT_S

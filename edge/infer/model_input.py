@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from edge.infer.bundle import ModelBundle
+
 FLOOR_KPA = 0.2  # export.data.corrupt: readings below this are 0 (what a calibrated board reads)
 SATURATION_KPA = 14.0  # export.data.SATURATION_KPA
 
@@ -44,7 +46,7 @@ def person_pressure_kpa(pressure_kpa: np.ndarray, mask: np.ndarray, floor_kpa: f
     return p
 
 
-def batch_inputs(bundle: Any, pressure_kpa: np.ndarray, masks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def batch_inputs(bundle: ModelBundle, pressure_kpa: np.ndarray, masks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """N people → encoder input (N, 1, H, W) float32 and translation origins (N, 3) (CoP of the same input)."""
     floor, sat = input_limits(bundle.manifest)
     people = np.stack([person_pressure_kpa(pressure_kpa, m, floor, sat) for m in masks])

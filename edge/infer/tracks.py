@@ -12,8 +12,8 @@ from typing import Iterable
 
 import numpy as np
 
-from edge.infer import FeatureWindow
 from edge.infer.heading import HeadingParams, HeadingResolver
+from edge.infer.window import FeatureWindow
 
 
 @dataclass
@@ -34,7 +34,7 @@ class TrackState:
     window: FeatureWindow
     result: PersonResult | None = None
     frames: int = 0  # frames this track was inferred or reused
-    heading: HeadingResolver | None = None  # the track's 180° resolution (FrameStages(resolve_heading=True))
+    heading: HeadingResolver | None = None  # the track's 180° resolution (PeopleInference(resolve_heading=True))
 
 
 class TrackBook:

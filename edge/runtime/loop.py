@@ -1,4 +1,4 @@
-"""The runtime: reader thread → pipeline thread → publisher thread, one stop event.
+"""The runtime's loop: reader thread → pipeline thread → publisher thread, one stop event; its status.
 
     rt = Runtime(load_config("cavatar.toml"))
     rt.start()                  # SetupError (bad bundle, wrong calibration, …) before any output exists
@@ -27,17 +27,24 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
 from edge.runtime.sd_notify import Notifier
-from edge.runtime.carpet_calibration import ChosenCalibration, SetupError, check_board, choose_calibration
+from edge.runtime.carpet_calibration import ChosenCalibration, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
+from edge.runtime.errors import SetupError
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.publisher import Publisher
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
+
+if TYPE_CHECKING:
+    from calibration.file import Calibration
+    from edge.infer.bundle import ModelBundle
+    from edge.runtime.events import EventStage
+    from edge.runtime.seq import SeqLedger
 
 log = logging.getLogger(__name__)
 
@@ -47,9 +54,9 @@ def _stderr(text: str) -> None:
 
 
 class Runtime:
-    def __init__(self, config: RuntimeConfig, *, source: Any = None, sinks: list | None = None, bundle: Any = None,
-                 calibration: Any = None, clock: Callable[[], float] = time.time,
-                 say: Callable[[str], None] = _stderr) -> None:
+    def __init__(self, config: RuntimeConfig, *, source: Any = None, sinks: list | None = None,
+                 bundle: ModelBundle | None = None, calibration: Calibration | None = None,
+                 clock: Callable[[], float] = time.time, say: Callable[[str], None] = _stderr) -> None:
         self.config = config
         self.clock = clock
         self.say = say
@@ -61,13 +68,13 @@ class Runtime:
         self.end_reason: str | None = None
         self.source: Any = source
         self.sinks: list | None = sinks
-        self.bundle: Any = bundle
+        self.bundle: ModelBundle | None = bundle
         self.chosen: ChosenCalibration | None = (
             ChosenCalibration(calibration, Path(getattr(calibration, "path", "(given)")), False) if calibration is not None else None)
         self.stages: FrameStages | None = None
-        self.events: Any = None  # edge.runtime.events.EventStage when [events] enabled
+        self.events: EventStage | None = None  # when [events] enabled
         self.publisher: Publisher | None = None
-        self.seqs: Any = None  # edge.runtime.seq.SeqLedger while set up
+        self.seqs: SeqLedger | None = None  # while set up
         self._seq_start = 0
         self.on_outcome: list[Callable[[FrameOutcome], None]] = []  # called in the pipeline thread (tests, the demo)
         self._stop = threading.Event()
@@ -431,7 +438,7 @@ class Runtime:
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
         work = {k: c.get(k, 0) for k in WORK_COUNTERS}
-        work["tracks_open"] = len(self.stages.tracks) if self.stages else 0
+        work["tracks_open"] = self.stages.tracks_open if self.stages else 0
         work["saved"] = {"frames_without_inference": c.get("frames_empty", 0) + c.get("frames_unconfirmed", 0),
                          "encoder_runs": c.get("person_frames", 0) - c.get("encoder_runs", 0),
                          "head_runs": c.get("person_frames", 0) - c.get("head_runs", 0)}
@@ -529,4 +536,4 @@ class Runtime:
         }
 
 
-__all__ = ["Runtime", "SetupError"]
+__all__ = ["Runtime"]
