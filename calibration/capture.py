@@ -53,7 +53,7 @@ class Capture:
         f = self.frames
         whole = bool(np.isfinite(f).all() and f.min(initial=0) >= 0 and f.max(initial=0) <= 65535
                      and np.array_equal(f, np.round(f)))
-        from edge.atomic import atomic_path  # whole or not at all: a resumed session reads it back
+        from cavatar_common.atomic import atomic_path  # whole or not at all: a resumed session reads it back
 
         with atomic_path(path) as tmp:
             np.savez(tmp, counts=f.astype(np.uint16 if whole else np.float32), t_s=self.t_s, meta=np.array(json.dumps(meta)))

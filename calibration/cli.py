@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from edge.cli import CliError
+from cavatar_common.errors import CliError
 
 STEP_FILES = ("empty", "walk", "board", "stance", "holdout")
 

@@ -149,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=7, help="seed of the virtual carpet (default 7)")
     ap.add_argument("--columns", type=int, default=6, help="frames drawn (default 6)")
     args = ap.parse_args(argv)
-    from edge.cli import CliError
+    from cavatar_common.errors import CliError
 
     try:
         code, final, frame_of_seq = run(args.out, args.seconds, args.people, args.seed)

@@ -54,7 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _error(text: str) -> Exception:
-    from edge.cli import CliError
+    from cavatar_common.errors import CliError
 
     return CliError(text)
 
