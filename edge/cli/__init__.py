@@ -26,7 +26,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.render",
     "sim.cli",
     "export.cli",
-    "calibration.cli",
+    "edge.cli.calibrate",
     "edge.cli.run",
     "edge.cli.config_cmd",
     "edge.cli.status",
