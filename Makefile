@@ -39,7 +39,7 @@ $(VENV)/.viz: $(VENV)/.runtime
 	touch $@
 
 run: venv $(VENV)/.viz
-	$(PY) -m edge.runtime.demo --out out/run --seconds 20 --people 2 --seed 7
+	$(PY) -m edge.cli.demo --out out/run --seconds 20 --people 2 --seed 7
 
 test: test-deps
 	$(PY) -m pytest -q

@@ -5,8 +5,11 @@ NaN can be represented), ``t_s`` (N,) device time, ``device`` the INFO fields
 (device_id, rows, cols, adc_bits, sign, firmware, protocol_version), ``pitch_m``,
 ``rate_hz`` and ``stats`` (source counters, e.g. missed frames).
 
-Captures load from ``cavatar record`` files (replayed through the real decoder) or
-from ``.npz`` files this module writes (``counts`` (N, H, W), ``t_s``, ``meta`` JSON).
+Captures load from ``.npz`` files this module writes (``counts`` (N, H, W), ``t_s``, ``meta``
+JSON), or are read from a carpet source: a live board, or a ``cavatar record`` file replayed
+through the real decoder. calibration does not open sources itself (it sits below the runtime
+in design.md's layering): whoever runs it passes in ``open_frames(url) -> FrameSource``
+(``edge.sources.open_source`` is one).
 :func:`frame_validity` is the garbage filter every step applies first.
 """
 
@@ -15,12 +18,31 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Iterable, Protocol
 
 import numpy as np
 
 DEFAULT_PITCH_M = 0.01905
 DEFAULT_RATE_HZ = 14.0
+
+
+class FrameSource(Protocol):
+    """What calibration reads frames from (an ``edge.sources.CarpetSource`` is one): ``start()`` opens it and
+    handshakes (``info`` then holds the board's INFO fields), ``frames(timeout_s)`` yields frames with ``counts``
+    (H, W) and ``t_s`` until the source ends, ``stats()`` its counters, ``stop()`` closes it."""
+
+    info: Any
+
+    def start(self) -> Any: ...
+
+    def stop(self) -> Any: ...
+
+    def frames(self, timeout_s: float) -> Iterable[Any]: ...
+
+    def stats(self) -> dict[str, Any]: ...
+
+
+OpenFrames = Callable[[str], FrameSource]  # a source URL → a FrameSource, not started
 
 
 @dataclass
@@ -53,14 +75,15 @@ class Capture:
         f = self.frames
         whole = bool(np.isfinite(f).all() and f.min(initial=0) >= 0 and f.max(initial=0) <= 65535
                      and np.array_equal(f, np.round(f)))
-        from edge.atomic import atomic_path  # whole or not at all: a resumed session reads it back
+        from cavatar_common.atomic import atomic_path  # whole or not at all: a resumed session reads it back
 
         with atomic_path(path) as tmp:
             np.savez(tmp, counts=f.astype(np.uint16 if whole else np.float32), t_s=self.t_s, meta=np.array(json.dumps(meta)))
 
     @classmethod
-    def load(cls, path: str | Path, pitch_m: float | None = None) -> "Capture":
-        """A ``.npz`` capture, or a ``cavatar record`` byte stream (replayed as fast as possible)."""
+    def load(cls, path: str | Path, pitch_m: float | None = None, open_frames: OpenFrames | None = None) -> "Capture":
+        """A ``.npz`` capture, or a ``cavatar record`` byte stream (replayed as fast as possible through
+        ``open_frames``, which the caller passes in)."""
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"no capture {path}")
@@ -69,8 +92,11 @@ class Capture:
                 meta = json.loads(str(z["meta"]))
                 cap = cls(z["counts"].astype(np.float32), z["t_s"].astype(np.float64), meta["device"],
                           meta.get("pitch_m", DEFAULT_PITCH_M), meta.get("rate_hz", DEFAULT_RATE_HZ), meta.get("stats", {}))
+        elif open_frames is None:
+            raise ValueError(f"{path} is a `cavatar record` stream: reading it needs the runtime's decoder; pass "
+                             "open_frames (edge.sources.open_source), as `cavatar calibrate` does")
         else:
-            cap = from_source(f"replay://{path.resolve()}?speed=0")
+            cap = from_source(f"replay://{path.resolve()}?speed=0", open_frames)
         if pitch_m:
             cap.pitch_m = pitch_m
         return cap
@@ -83,16 +109,12 @@ def device_of(info: Any) -> dict[str, Any]:
             "protocol_version": int(getattr(info, "protocol_version", 0))}
 
 
-def from_source(url_or_source: Any, max_frames: int | None = None, on_frame=None) -> Capture:
-    """Read frames from a source URL (or an open CarpetSource) until it ends, ``max_frames``
-    arrived or Ctrl-C. ``on_frame(i, counts)`` is called per frame (live progress); False stops.
+def from_source(url: str, open_frames: OpenFrames, max_frames: int | None = None, on_frame=None) -> Capture:
+    """Read frames from the source ``open_frames(url)`` until it ends, ``max_frames`` arrived or Ctrl-C.
+    ``on_frame(i, counts)`` is called per frame (live progress); False stops.
     """
-    from edge.sources import open_source
-
-    own = isinstance(url_or_source, str)
-    source = open_source(url_or_source, queue_frames=1024) if own else url_or_source
-    if own:
-        source.start()
+    source = open_frames(url)
+    source.start()
     frames, times = [], []
     try:
         try:
@@ -108,8 +130,7 @@ def from_source(url_or_source: Any, max_frames: int | None = None, on_frame=None
         stats = source.stats()
         info = source.info
     finally:
-        if own:
-            source.stop()
+        source.stop()
     rate = float(getattr(info, "rate_mhz", 0) or 0) / 1000.0 or DEFAULT_RATE_HZ
     shape = (int(info.rows), int(info.cols))
     arr = np.stack(frames) if frames else np.zeros((0, *shape), np.float32)

@@ -7,7 +7,7 @@ what to do. Nothing is left behind (the write test removes its file; the board i
 
     check_destination(Path("calibration.npz"))
     check_work_folder(Path("calibration-work"))
-    check_board("serial:///dev/ttyACM0")
+    check_board("serial:///dev/ttyACM0", open_source)   # the runtime's opener, passed in
     mass = ask_mass(input)
 """
 
@@ -17,6 +17,9 @@ import os
 import tempfile
 from pathlib import Path
 from typing import Callable
+
+from calibration.capture import OpenFrames
+from cavatar_common.errors import LinkLost, SourceError
 
 SERVICE_FOLDER = "/var/lib/cavatar"
 
@@ -72,12 +75,11 @@ def check_work_folder(work: Path) -> None:
         raise PreflightError(f"cannot use the session folder {work}: {why}. Give a folder you can write with --work DIR.")
 
 
-def check_board(url: str) -> None:
-    """The live board opens and answers (handshake), then is closed again: a missing, busy or silent port is said now."""
-    from edge.sources import LinkLost, SourceError, open_source
-
+def check_board(url: str, open_frames: OpenFrames) -> None:
+    """The live board ``open_frames(url)`` opens and answers (handshake), then is closed again: a missing, busy or
+    silent port is said now."""
     try:
-        source = open_source(url)
+        source = open_frames(url)
         source.start()
     except (SourceError, LinkLost, OSError, ValueError) as exc:
         raise PreflightError(f"board {url}: {exc}" + ("" if str(exc).rstrip().endswith(".") else ".")

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from calibration.capture import Capture, from_source
+from calibration.capture import Capture, OpenFrames, from_source
 from calibration.terminal import render_map
 
 PROMPTS = {
@@ -33,8 +33,10 @@ PROMPTS = {
 class RecordingProvider:
     """Captures from files (``.npz`` from a session, or ``cavatar record`` byte streams)."""
 
-    def __init__(self, files: dict[str, str], out: Callable[[str], None] = print) -> None:
-        self.files, self.out = files, out
+    def __init__(self, files: dict[str, str], out: Callable[[str], None] = print,
+                 open_frames: OpenFrames | None = None) -> None:
+        """``open_frames`` replays ``cavatar record`` files (edge.sources.open_source); ``.npz`` files need none."""
+        self.files, self.out, self.open_frames = files, out, open_frames
 
     def capture(self, step: str, attempt: int, last) -> Capture | None:
         if attempt > 0:
@@ -43,7 +45,7 @@ class RecordingProvider:
         if path is None:
             return None
         self.out(f"{step}: reading {path}")
-        return Capture.load(path)
+        return Capture.load(path, open_frames=self.open_frames)
 
     def say(self, text: str) -> None:
         self.out(text)
@@ -105,9 +107,10 @@ class SimProvider:
 class LiveProvider:
     """A live board: prompts the installer, records each step, shows the coverage map."""
 
-    def __init__(self, url: str, ask: Callable[[str], str] = input, out: Callable[[str], None] = print,
-                 rate_hz: float = 14.0) -> None:
-        self.url, self.ask, self.out, self.rate_hz = url, ask, out, rate_hz
+    def __init__(self, url: str, open_frames: OpenFrames, ask: Callable[[str], str] = input,
+                 out: Callable[[str], None] = print, rate_hz: float = 14.0) -> None:
+        """``open_frames(url)``: the board's frame source, passed in by the runtime (edge.sources.open_source)."""
+        self.url, self.open_frames, self.ask, self.out, self.rate_hz = url, open_frames, ask, out, rate_hz
 
     def capture(self, step: str, attempt: int, last) -> Capture | None:
         title, text, seconds = PROMPTS[step]
@@ -132,7 +135,7 @@ class LiveProvider:
                 self.out(f"   {i / self.rate_hz:4.0f} s of {seconds:.0f} s")
             return True
 
-        cap = from_source(self.url, max_frames=frames_max, on_frame=on_frame)
+        cap = from_source(self.url, self.open_frames, max_frames=frames_max, on_frame=on_frame)
         self.out(f"   {cap.frames.shape[0]} frames in {time.monotonic() - t0:.0f} s")
         return cap
 

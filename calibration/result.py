@@ -40,7 +40,7 @@ class StepResult:
     def save(self, path: str | Path) -> None:
         meta = {"step": self.step, "ok": self.ok, "retry": self.retry, "findings": self.findings,
                 "numbers": self.numbers}
-        from edge.atomic import atomic_path  # whole or not at all: a resumed session reads it back
+        from cavatar_common.atomic import atomic_path  # whole or not at all: a resumed session reads it back
 
         with atomic_path(path) as tmp:
             np.savez_compressed(tmp, _meta=np.array(json.dumps(meta, default=_jsonable)), **self.arrays)

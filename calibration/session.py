@@ -67,7 +67,7 @@ class Session:
 
     # ------------------------------------------------------------------ storage
     def _save_state(self) -> None:
-        from edge.atomic import write_atomic
+        from cavatar_common.atomic import write_atomic
 
         state = {"done": self.done, "options": self.options.__dict__}
         write_atomic(self.workdir / "state.json", json.dumps(state, indent=1))

@@ -648,7 +648,7 @@ def run_speed_error(cfg: SpeedErrorConfig, command: str = "") -> dict[str, Any]:
     import onnxruntime as ort
     import torch
 
-    from edge.provenance import git_revision
+    from cavatar_common.provenance import git_revision
     from export.model import ModelConfig
 
     if not cfg.bundles:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from edge.infer.bundle import SCHEMA, seal_manifest, write_manifest
-from edge.provenance import git_revision, sha256_file
+from cavatar_common.provenance import git_revision, sha256_file
 from edge.infer.normalise import NORMALISATION
 from export.model import OUTPUT_SIZES, OUTPUTS, ModelConfig
 

@@ -7,7 +7,7 @@ import argparse
 import contextlib
 import json
 
-from edge.cli import CliError
+from cavatar_common.errors import CliError
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from edge.cli import CliError
+from cavatar_common.errors import CliError
 
 
 def _people(text: str) -> tuple[int, int]:

@@ -24,7 +24,7 @@ def sheet(activity: str, out: Path, seed: int = 2, seconds: float = 6.0) -> Path
     from matplotlib.figure import Figure
 
     from edge.body import BodyModel
-    from edge.body.render import _draw_view
+    from edge.body.render import draw_view
     from sim.contact import ContactModel, mesh_centroid_m, subject_mass_kg, regional_tissue
     from sim.motion import Subject, person_track
 
@@ -49,7 +49,7 @@ def sheet(activity: str, out: Path, seed: int = 2, seconds: float = 6.0) -> Path
         res = carpet.pressure_kpa(out_fw["vertices"][t], body.faces, mass, acc_z_m_s2=float(acc[t, 2]), com_m=com[t],
                                   acc_xy_m_s2=acc[t, :2], tissue_kpa_per_mm=tissue)
         ax = fig.add_subplot(2, MOMENTS, k + 1)
-        _draw_view(ax, [out_fw["vertices"][t]], body.faces, "side")
+        draw_view(ax, [out_fw["vertices"][t]], body.faces, "side")
         ax.set_title(f"t = {t / 14:.1f} s", fontsize=9)
         ax = fig.add_subplot(2, MOMENTS, MOMENTS + k + 1)
         p = res.pressure_kpa

@@ -12,7 +12,7 @@ def draw_frame(frame: dict[str, np.ndarray], manifest: dict, path: str | Path, b
     from matplotlib.figure import Figure
 
     from edge.body import SMPL_PARENTS, BodyModel
-    from edge.body.render import _draw_view
+    from edge.body.render import draw_view
 
     pitch, rows, cols = manifest["pitch_m"], manifest["rows"], manifest["cols"]
     extent = (0, cols * pitch, rows * pitch, 0)  # x along columns, y along rows (row 0 at the top)
@@ -35,7 +35,7 @@ def draw_frame(frame: dict[str, np.ndarray], manifest: dict, path: str | Path, b
         out = model.forward(frame["pose_aa"][present], frame["betas"][present], frame["transl_m"][present], vertices=True)
         for k, view in enumerate(("top", "side")):
             a = fig.add_subplot(1, 4, 3 + k)
-            _draw_view(a, list(out["vertices"]), model.faces, view, joints=list(out["joints"]), parents=SMPL_PARENTS)
+            draw_view(a, list(out["vertices"]), model.faces, view, joints=list(out["joints"]), parents=SMPL_PARENTS)
             if view == "top":
                 a.set_xlim(0, cols * pitch)
                 a.set_ylim(rows * pitch, 0)

@@ -29,7 +29,7 @@ VIEWS = {
 _COLOURS = [(0.78, 0.62, 0.52), (0.45, 0.60, 0.80), (0.55, 0.75, 0.50), (0.85, 0.70, 0.35)]
 
 
-def _draw_view(ax, bodies, faces, view: str, joints=None, parents=None, floor_z: float | None = 0.0):
+def draw_view(ax, bodies, faces, view: str, joints=None, parents=None, floor_z: float | None = 0.0):
     from matplotlib.collections import LineCollection, PolyCollection
 
     right, up, look = VIEWS[view]
@@ -87,7 +87,7 @@ def render_png(path, bodies, faces, views=("front", "side"), title: str | None =
     FigureCanvasAgg(fig)
     for k, view in enumerate(views):
         ax = fig.add_subplot(1, len(views), k + 1)
-        _draw_view(ax, bodies, np.asarray(faces), view, joints, parents, floor_z)
+        draw_view(ax, bodies, np.asarray(faces), view, joints, parents, floor_z)
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()

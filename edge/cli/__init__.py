@@ -13,6 +13,7 @@ import importlib
 import logging
 import sys
 
+from cavatar_common.errors import CliError  # noqa: F401  (re-exported: the subcommands raise it)
 from edge import __version__
 
 # Module paths, in the order they appear in --help. Later issues append theirs.
@@ -25,7 +26,7 @@ SUBCOMMANDS: list[str] = [
     "edge.cli.render",
     "sim.cli",
     "export.cli",
-    "calibration.cli",
+    "edge.cli.calibrate",
     "edge.cli.run",
     "edge.cli.config_cmd",
     "edge.cli.status",
@@ -38,10 +39,6 @@ Sources are URLs: serial:///dev/ttyACM0?baud=2000000, usb://VID:PID,
 replay://capture.bin?speed=1, sim://?people=2&seed=7 (the virtual carpet).
 Run `cavatar COMMAND --help` for the options of one command.
 """
-
-
-class CliError(Exception):
-    """A user-facing error: printed as one line (no traceback), exit code 2."""
 
 
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, str]]:

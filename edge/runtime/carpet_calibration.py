@@ -3,11 +3,11 @@
 - ``[calibration] file`` given: it is loaded (its SHA-256 checked) and must belong to the
   board that answered the handshake (device id, grid, ADC bits, sign, firmware); otherwise
   :class:`SetupError`.
-- no file, ``sim://`` source (world=bodies): the scripted calibration session is run on the
-  virtual carpet of the same seed, grid, ADC bits and pitch, as an installer would run
-  `cavatar calibrate --sim`, and saved as ``calibration-sim-<seed>-<grid>.npz`` beside the
-  status file (the output folder). A later run with the same output folder finds it and
-  uses it again (if it still matches the board).
+- no file, a virtual carpet (a source plug-in with a sensor model, e.g. ``sim://``, world=bodies):
+  the scripted calibration session is run on the sensor the plug-in gives for the same seed,
+  grid, ADC bits and pitch, as an installer would run `cavatar calibrate --sim`, and saved as
+  ``calibration-<scheme>-<seed>-<grid>.npz`` beside the status file (the output folder). A later
+  run with the same output folder finds it and uses it again (if it still matches the board).
 - no file, a real carpet (serial://, usb://, replay://): refused, saying how to calibrate.
 """
 
@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from calibration.file import Calibration, CalibrationError
+from cavatar_common.errors import SourceError
 from edge.runtime.errors import SetupError
 
 
@@ -31,8 +32,8 @@ class ChosenCalibration:
     automatic: bool
 
 
-def sim_calibration_path(out_dir: Path, seed: int, grid: int) -> Path:
-    return Path(out_dir) / f"calibration-sim-{seed}-{grid}.npz"
+def sim_calibration_path(out_dir: Path, seed: int, grid: int, scheme: str = "sim") -> Path:
+    return Path(out_dir) / f"calibration-{scheme}-{seed}-{grid}.npz"
 
 
 def choose_calibration(file: str, source_url: str, out_dir: Path, say: Callable[[str], None] = print) -> ChosenCalibration:
@@ -45,10 +46,16 @@ def choose_calibration(file: str, source_url: str, out_dir: Path, say: Callable[
             return ChosenCalibration(Calibration.load(path), path, False)
         except CalibrationError as exc:
             raise SetupError(f"calibration {path}: {exc}") from None
+    from edge.sources import source_plugin
+
     scheme = source_url.partition("://")[0]
-    if scheme != "sim":
+    try:
+        plugin = source_plugin(source_url)
+    except (ValueError, SourceError) as exc:
+        raise SetupError(f"source {source_url}: {exc}") from None
+    if plugin is None:
         raise SetupError(_how_to_calibrate(scheme, source_url))
-    return _sim_calibration(source_url, Path(out_dir), say)
+    return _virtual_calibration(plugin, source_url, Path(out_dir), say)
 
 
 def check_board(chosen: ChosenCalibration, board_info: Any) -> None:
@@ -76,16 +83,16 @@ def _how_to_calibrate(scheme: str, url: str) -> str:
             "[calibration] file in the configuration).")
 
 
-def _sim_calibration(url: str, out_dir: Path, say: Callable[[str], None]) -> ChosenCalibration:
-    from edge.sources import sim as sim_scheme
+def _virtual_calibration(plugin: Any, url: str, out_dir: Path, say: Callable[[str], None]) -> ChosenCalibration:
     from edge.urls import parse_url
 
-    _, opts = parse_url(url, sim_scheme.SCHEME, sim_scheme.FORM, sim_scheme.OPTIONS)
-    if opts["world"] != "bodies":
-        raise SetupError(f"{url}: automatic calibration runs on the simulated bodies world only (world=bodies); "
-                         "the footsteps world has no sensor model to calibrate. Use world=bodies or pass --calibration FILE.")
-    path = sim_calibration_path(out_dir, opts["seed"], opts["grid"])
-    expected = {"device_id": f"sim-{opts['seed']}", "rows": opts["grid"], "cols": opts["grid"], "adc_bits": opts["bits"]}
+    _, opts = parse_url(url, plugin.scheme, plugin.form, plugin.options)
+    try:
+        sensor = plugin.calibration_sensor(opts)
+    except ValueError as exc:
+        raise SetupError(f"{url}: {exc}, or pass --calibration FILE.") from None
+    path = sim_calibration_path(out_dir, opts["seed"], opts["grid"], plugin.scheme)
+    expected = {"device_id": plugin.module.device_id(opts), "rows": opts["grid"], "cols": opts["grid"], "adc_bits": opts["bits"]}
     if path.exists():
         try:
             cal = Calibration.load(path)
@@ -104,21 +111,19 @@ def _sim_calibration(url: str, out_dir: Path, say: Callable[[str], None]) -> Cho
                          f"written ({exc.strerror or exc}); set [runtime] status_file (--status-file) to a writable place, "
                          "or pass --calibration FILE") from None
     t0 = time.monotonic()
-    cal = run_sim_session(opts["seed"], opts["grid"], opts["bits"], opts["pitch_mm"], path)
-    say(f"calibration: no calibration file, so the virtual carpet sim-{opts['seed']} was calibrated as an installer "
+    cal = run_sim_session(sensor, opts["seed"], path)
+    say(f"calibration: no calibration file, so the virtual carpet {expected['device_id']} was calibrated as an installer "
         f"would (scripted `cavatar calibrate --sim` session, {time.monotonic() - t0:.0f} s) → {path}")
     return ChosenCalibration(cal, path, True)
 
 
-def run_sim_session(seed: int, grid: int, adc_bits: int, pitch_mm: float, out_path: Path,
-                    mass_kg: float = 72.0) -> Calibration:
-    """The scripted calibration session on the virtual carpet of ``sim://?seed=&grid=&bits=&pitch_mm=``; saves ``out_path``."""
+def run_sim_session(sensor: Any, seed: int, out_path: Path, mass_kg: float = 72.0) -> Calibration:
+    """The scripted calibration session on a virtual carpet's ``sensor`` (its plug-in's ``calibration_sensor``),
+    the actor drawn from ``seed``; saves ``out_path``."""
     from calibration.actor import Actor
     from calibration.providers import SimProvider
     from calibration.session import Options, Session, SessionError
-    from sim.live import live_sensor
 
-    sensor = live_sensor(seed, grid, adc_bits, pitch_mm)
     provider = SimProvider(Actor(sensor, mass_kg=mass_kg, seed=seed), None, out=lambda text: None, live_map=False)
     out_path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="cavatar-simcal-") as work:

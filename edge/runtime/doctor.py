@@ -616,10 +616,9 @@ def _writable_file(check: str, path: Path, free_space: bool, folder_only: bool =
 
 
 def _sim_options(url: str) -> dict[str, Any]:
-    from edge.sources import sim as sim_scheme
-    from edge.urls import parse_url
+    from edge.sources import source_options
 
-    return parse_url(url, sim_scheme.SCHEME, sim_scheme.FORM, sim_scheme.OPTIONS)[1]
+    return source_options(url)
 
 
 def _under(path: Path, folder: Path) -> bool:

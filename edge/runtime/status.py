@@ -33,9 +33,9 @@ SCHEMA = "cavatar.status/1"
 
 
 def write_status(path: str | Path, status: dict[str, Any]) -> None:
-    """Write ``status`` to ``path`` atomically (edge.atomic: a temporary file beside it, then a rename). Not fsynced:
+    """Write ``status`` to ``path`` atomically (cavatar_common.atomic: a temporary file beside it, then a rename). Not fsynced:
     it is rewritten every second, on a tmpfs (/run/cavatar) in the service, and a reader never sees half of it."""
-    from edge.atomic import write_atomic
+    from cavatar_common.atomic import write_atomic
 
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)

@@ -1,4 +1,4 @@
-"""What every carpet source is made of: a byte link, and the errors sources raise.
+"""What every carpet source is made of: a byte link, and the errors sources raise (from cavatar_common.errors).
 
 A *link* moves bytes to and from the readout board (a serial port, a USB bulk pipe,
 a recorded file, the in-process virtual carpet). Everything above it — handshake,
@@ -9,19 +9,8 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 
+from cavatar_common.errors import LinkEnded, LinkLost, SourceError  # noqa: F401  (shared with calibration and plug-ins)
 from edge.urls import Option, parse_bool, parse_url  # noqa: F401  (re-exported for the scheme modules)
-
-
-class SourceError(Exception):
-    """A source cannot be opened or used; the message says what to do."""
-
-
-class LinkLost(Exception):
-    """The link went away (unplugged, closed); a reconnectable source will try again."""
-
-
-class LinkEnded(Exception):
-    """The link has no more data and never will (end of a recording)."""
 
 
 class Link(ABC):

@@ -54,7 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _error(text: str) -> Exception:
-    from edge.cli import CliError
+    from cavatar_common.errors import CliError
 
     return CliError(text)
 
@@ -68,8 +68,8 @@ def _scenes(args: argparse.Namespace) -> tuple[str, tuple]:
             raise _error("--seconds goes with --source; a --set has its own lengths")
         name = args.set or "standard"
         return name, SETS[name]
-    from edge.sources import sim as sim_scheme
-    from edge.urls import parse_url
+    from edge.sources import source_options
+    from sim import source as sim_scheme
 
     if not args.source.startswith("sim://"):
         raise _error(f"--source {args.source}: only the virtual carpet has a truth to score against; give "
@@ -77,7 +77,7 @@ def _scenes(args: argparse.Namespace) -> tuple[str, tuple]:
     if args.seconds is None or not args.seconds > 0:
         raise _error("--source needs --seconds S (> 0): how much of the scene to score")
     try:
-        _, o = parse_url(args.source, sim_scheme.SCHEME, sim_scheme.FORM, sim_scheme.OPTIONS)
+        o = source_options(args.source)
     except ValueError as exc:
         raise _error(str(exc)) from None
     fixed = {"world": "bodies", "grid": 96, "pitch_mm": 19.05, "rate": 14.0}

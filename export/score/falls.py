@@ -206,7 +206,7 @@ def main(argv=None) -> int:
     from dataclasses import asdict
     from datetime import datetime, timezone
 
-    from edge.provenance import git_revision
+    from cavatar_common.provenance import git_revision
     from export.score.session import machine
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -54,7 +54,7 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
                  say: Callable[[str], None] = print) -> dict[str, Any]:
     """Capture, judge and summarise ``scenes`` (see the module doc); a scene that fails is reported, not fatal."""
     from edge.body import BodyModel
-    from edge.provenance import git_revision
+    from cavatar_common.provenance import git_revision
 
     revision = git_revision()  # of the code that runs, before anything is committed meanwhile
     body = BodyModel.load("lite")  # the body the simulator poses and the shipped bundle is trained on

@@ -33,7 +33,7 @@ def render_pose(path, model, pose_name, carpet, mass, tissue, xy_m=(0.9, 0.9), y
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from edge.body.render import _draw_view
+    from edge.body.render import draw_view
     from sim.contact.scenes import grounded_vertices, scene_pose
 
     v = grounded_vertices(model, scene_pose(model, pose_name), xy_m=xy_m, yaw_deg=yaw_deg)
@@ -55,9 +55,9 @@ def render_pose(path, model, pose_name, carpet, mass, tissue, xy_m=(0.9, 0.9), y
     fig = Figure(figsize=(18, 4.8), dpi=90)
     FigureCanvasAgg(fig)
     ax = [fig.add_subplot(1, 4, k + 1) for k in range(4)]
-    _draw_view(ax[0], [v], model.faces, "side")
+    draw_view(ax[0], [v], model.faces, "side")
     ax[0].plot(res.com_m[1], res.com_m[2], "+", color="tab:green", ms=14, mew=2)
-    _draw_view(ax[1], [v], model.faces, "top", floor_z=None)
+    draw_view(ax[1], [v], model.faces, "top", floor_z=None)
     ax[1].plot(res.com_m[0], res.com_m[1], "+", color="tab:green", ms=14, mew=2)
     ax[1].plot(res.cop_total_m[0], res.cop_total_m[1], "o", mfc="none", color="tab:blue", ms=10, mew=1.5)
     im = _pressure_panel(ax[2], fine, fine_ext, f"fine field ({c * 1000:.2f} mm cells): {area_f * 1e4:.0f} cm²,\n"

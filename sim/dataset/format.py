@@ -41,7 +41,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from edge.provenance import git_revision, sha256_file
+from cavatar_common.provenance import git_revision, sha256_file
 
 SCHEMA = "cavatar.dataset/1"
 SPLITS = ("train", "val", "test")

@@ -22,7 +22,7 @@ def draw_activity(path, activity: str, subject_id: int = 3, seed: int = 1, momen
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from edge.body.render import _draw_view
+    from edge.body.render import draw_view
 
     lite = BodyModel.load("lite")
     track = person_track(Subject.random(subject_id), [activity], seconds, 14.0, rng=seed, model=lite)
@@ -41,7 +41,7 @@ def draw_activity(path, activity: str, subject_id: int = 3, seed: int = 1, momen
     for k, f in enumerate(frames):
         for row, view in enumerate(("front", "side")):
             ax = fig.add_subplot(2, moments, row * moments + k + 1)
-            _draw_view(ax, [out["vertices"][k]], model.faces, view, [out["joints"][k]], model.parents, 0.0)
+            draw_view(ax, [out["vertices"][k]], model.faces, view, [out["joints"][k]], model.parents, 0.0)
             on = [n for n, c in zip(names, track.contact[f]) if c]
             ax.set_title(f"{view} t={f / track.rate_hz:.1f}s" + ("\n" + ",".join(on) if row == 0 else ""), fontsize=7)
     fig.suptitle(f"{activity} (subject 3, seed {seed}; contacts = generator's schedule)", fontsize=10)

@@ -142,13 +142,16 @@ def test_terminal_map_draws_coverage_and_faults():
 def test_live_provider_and_a_recorded_byte_stream_go_through_the_real_decoder(tmp_path, capsys):
     from calibration.capture import Capture
     from calibration.providers import LiveProvider
+    from edge.cli.calibrate import open_frames  # calibration reads frames through the opener the runtime passes in
 
     url = "sim://?world=footsteps&people=0&grid=32&bits=12&speed=0"
-    live = LiveProvider(url, ask=lambda prompt: "", out=lambda s: None)
+    live = LiveProvider(url, open_frames, ask=lambda prompt: "", out=lambda s: None)
     cap = live.capture("self_test", 0, None)
     assert cap.frames.shape[1:] == (32, 32) and cap.device["rows"] == 32 and cap.device["adc_bits"] == 12
     assert cap.frames.shape[0] == 42 and abs(cap.rate_hz - 14.0) < 1e-6
     bin_path = tmp_path / "empty.bin"
     assert main(["record", str(bin_path), "--source", url, "--frames", "80"]) == 0
-    rec = Capture.load(bin_path)
+    with pytest.raises(ValueError, match="pass open_frames"):
+        Capture.load(bin_path)  # calibration alone has no decoder: it says what it needs
+    rec = Capture.load(bin_path, open_frames=open_frames)
     assert rec.frames.shape[0] >= 80 and rec.shape == (32, 32) and rec.device["device_id"] == cap.device["device_id"]

@@ -118,7 +118,7 @@ def test_objects_press_with_their_weight_and_a_pet_lies_down_now_and_then():
 
 
 def test_sim_url_takes_fall_scenarios_and_names_the_known_ones():
-    from edge.sources.sim import open_link
+    from edge.sources import open_link
 
     assert open_link("sim://?activities=fall_forward,lie_down,squat&speed=0").opts["activities"] == (
         "fall_forward", "lie_down", "squat")

@@ -43,7 +43,7 @@ def make_premade(people: int, n: int) -> Premade:
 
 def premade_board(premade: Premade, **kwargs: Any):
     """A VirtualBoard that answers as ``sim://?seed=7`` (so the seed-7 calibration fits it) and scans ``premade``."""
-    from edge.sources.sim import packing_for
+    from edge.sources.virtual import packing_for
     from firmware_protocol.virtual_board import VirtualBoard
 
     return VirtualBoard(rows=GRID, cols=GRID, tile_rows=3, tile_cols=3, adc_bits=premade.adc_bits,

@@ -1,6 +1,6 @@
 """`make run`: the runtime on the virtual carpet, then reconstructed bodies beside the simulator's truth.
 
-    python -m edge.runtime.demo --out out/run --seconds 20 --people 2 --seed 7
+    python -m edge.cli.demo --out out/run --seconds 20 --people 2 --seed 7
 
 1. runs ``cavatar run``'s own loop (:func:`edge.cli.run.serve`, the one-line summary each
    second) on ``sim://?people=2&seed=7`` for ``--seconds`` into ``<out>/bodies.jsonl``
@@ -10,9 +10,9 @@
    no frame index: ``seq`` counts records, heartbeats included; the pipeline reports
    which board frame each record came from, and the virtual board's frame_seq is the
    simulator's frame index);
-3. draws ``<out>/bodies.png``: for a few records spread over the run, the true bodies
-   (``sim.live.LiveCarpet.truth(k)``, re-created with the same seed) above the reconstructed
-   ones, front view, each column one frame time.
+3. draws ``<out>/bodies.png``: for a few records spread over the run, the true bodies (the
+   ``sim://`` plug-in's carpet made again with the same seed, its ``truth(k)``) above the
+   reconstructed ones, front view, each column one frame time.
 
 Drawing needs matplotlib (the ``viz`` extra, which `make run` installs); the runtime does not.
 """
@@ -94,12 +94,13 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
     from matplotlib.figure import Figure
 
     from edge.body import BodyModelWarning
-    from edge.body.render import _draw_view
-    from sim.live import LiveCarpet
+    from edge.body.render import draw_view
+    from edge.sources import source_options, source_plugin
 
     if not records:
         raise ValueError("no record with people to draw")
-    carpet = LiveCarpet(96, 96, people, seed)
+    url = f"sim://?people={people}&seed={seed}&speed=0"  # the run's carpet, made again for its truth
+    carpet, _ = source_plugin(url).module.open_carpet(source_options(url))
     model = carpet.body  # the body model the simulator and the shipped bundle use
     fig = Figure(figsize=(2.6 * len(records), 6.4), dpi=110)
     FigureCanvasAgg(fig)
@@ -119,8 +120,8 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
         order = match_people([t["transl_m"] for t in truth], [p["transl_m"] for p in ppl])
         rv, ppl = [rv[i] for i in order], [ppl[i] for i in order]  # same colour above and below = same person
         ax_t, ax_r = axes[0, col], axes[1, col]
-        _draw_view(ax_t, list(tv), model.faces, "front")
-        _draw_view(ax_r, rv, model.faces, "front")
+        draw_view(ax_t, list(tv), model.faces, "front")
+        draw_view(ax_r, rv, model.faces, "front")
         pts = np.concatenate([*tv, *rv])
         pad = 0.1
         for ax in (ax_t, ax_r):  # the same box above and below, so truth and reconstruction compare
@@ -142,14 +143,14 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m edge.runtime.demo", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m edge.cli.demo", description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=Path("out/run"), help="output folder (default out/run)")
     ap.add_argument("--seconds", type=float, default=20.0, help="how long the runtime runs (default 20)")
     ap.add_argument("--people", type=int, default=2, help="people on the virtual carpet (default 2)")
     ap.add_argument("--seed", type=int, default=7, help="seed of the virtual carpet (default 7)")
     ap.add_argument("--columns", type=int, default=6, help="frames drawn (default 6)")
     args = ap.parse_args(argv)
-    from edge.cli import CliError
+    from cavatar_common.errors import CliError
 
     try:
         code, final, frame_of_seq = run(args.out, args.seconds, args.people, args.seed)

@@ -1,4 +1,4 @@
-"""edge.atomic (issue 17): a file is the old one or the whole new one, never half — the one helper for the status
+"""cavatar_common.atomic (issue 17): a file is the old one or the whole new one, never half — the one helper for the status
 file, the calibration session's state, captures and step results."""
 
 import os
@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from edge.atomic import atomic_path, write_atomic
+from cavatar_common.atomic import atomic_path, write_atomic
 
 
 def test_the_new_content_replaces_the_old_and_nothing_is_left_beside_it(tmp_path):

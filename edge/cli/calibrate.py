@@ -10,6 +10,10 @@ Writes the calibration file (``--out``), ``<out>.png`` and ``<out>.txt`` (the re
 Before anything is asked or recorded, the destination and the session folder are tested by
 writing, and a live board is opened and must answer (calibration/preflight.py): a missing or
 busy port, an unwritable --out or a closed stdin is one line and exit 2, never a traceback.
+
+The command lives in edge, above calibration: it opens the sources (edge.sources) and passes
+them in, so calibration never imports the runtime. ``--sim`` calibrates the carpet that
+``sim://?seed=S&grid=G`` streams, through the source plug-in's sensor model.
 """
 
 from __future__ import annotations
@@ -52,23 +56,40 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def open_frames(url: str):
+    """The frame source calibration reads (calibration.capture.OpenFrames): a carpet source with room for a step."""
+    from edge.sources import open_source
+
+    return open_source(url, queue_frames=1024)
+
+
+def _sim_sensor(seed: int, grid: int):
+    """The sensor model of ``sim://?seed=&grid=``, from its source plug-in."""
+    from edge.sources import SourceError, source_options, source_plugin
+
+    url = f"sim://?seed={seed}&grid={grid}"
+    try:
+        return source_plugin(url).calibration_sensor(source_options(url))
+    except (ValueError, SourceError) as exc:
+        raise CliError(f"--sim: {exc}") from None
+
+
 def _provider(args):
     from calibration.providers import LiveProvider, RecordingProvider, SimProvider
 
     files = {s: getattr(args, s) for s in STEP_FILES if getattr(args, s)}
     if args.sim:
         from calibration.actor import Actor
-        from sim.sensor import CarpetSensor
 
-        sensor = CarpetSensor.random(args.seed, grid=args.grid, faults=True)
+        sensor = _sim_sensor(args.seed, args.grid)
         print(f"virtual carpet: {sensor!r}")
         if args.mass is None:
             args.mass = 72.0
         return SimProvider(Actor(sensor, mass_kg=args.mass, seed=args.seed), args.intruder, live_map=not args.no_map)
     if args.source:
-        return LiveProvider(args.source)
+        return LiveProvider(args.source, open_frames)
     if files:
-        return RecordingProvider(files)
+        return RecordingProvider(files, open_frames=open_frames)
     return None
 
 
@@ -82,7 +103,7 @@ def preflight(args: argparse.Namespace, ask=input) -> None:
         check_work_folder(Path(args.work))
         check_recordings({s: getattr(args, s) for s in STEP_FILES if getattr(args, s)})
         if args.source:
-            check_board(args.source)
+            check_board(args.source, open_frames)
             if args.mass is None:
                 args.mass = ask_mass(ask)
     except PreflightError as exc:
