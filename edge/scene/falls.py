@@ -37,6 +37,10 @@ import numpy as np
 EVENT_TYPES = ("fall", "person_down")
 EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
 EXERCISE_AREA_FRACTION = 0.05  # ... or its contact area changes by more than this fraction
+RUN_GAP_S = 0.25  # on-the-feet readings further apart than this are two stances
+SEATED_STILL_M = 0.05  # a seated person's feet stay within this of where they rest ...
+SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
+STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
 STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
 
 
@@ -72,12 +76,21 @@ class FallConfig:
     floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this (lying ≈ 0.05–0.11 m²)")
     floor_min_length_m: float = _f(0.0, "on the floor (lying): pressure length at least this")
     floor_long_m: float = _f(1.6, "... or a body this long (feet to shoulders on the floor) ...")
-    floor_long_min_area_m2: float = _f(0.025, "... with at least this contact area")
+    floor_long_min_area_m2: float = _f(0.025, "... with at least this contact area ...")
+    floor_long_max_kpa: float = _f(10.0, "... pressed at most this on average (a lying body spreads its weight; the "
+                                         "feet of a deep lunge or a plank's hands and feet carry it on small prints)")
     floor_stay_min_area_m2: float = _f(0.04, "still on the floor (once there): contact area at least this")
+    floor_min_kpa: float = _f(3.5, "on the floor: the load over the contact area at least this (an adult lying "
+                                   "presses ≈ 4–9 kPa on average; a pet of ≤ 30 kg lying spreads ≈ 2 kPa, a bag less)")
     fall_radius_m: float = _f(1.6, "the body on its feet must have stood within this of where the load now lies")
     min_shift_m: float = _f(0.45, "... and at least this far from it: the load moved by about a body's height "
                                   "(sitting down or a bag dropped beside someone moves it less)")
-    max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this")
+    max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this (lighter: the body was "
+                                    "in the air)")
+    seated_s: float = _f(1.5, "a still, light footprint held this long is someone seated on a chair beside the carpet "
+                              "(only their feet on it) ...")
+    seated_load_ratio: float = _f(3.5, "... when the body that lands carries at least this times its load (seated, "
+                                       "the feet carry ≈ 15–30 % of the weight): a fall wherever it lands")
     exercise_activities: list[str] = _f(["push_up", "sit_up"], "the model's activities that mark a floor exercise: "
                                                                 "no person_down once seen while the body moves ...")
     exercise_s: float = _f(1.5, "... for this long in all (someone lying still is not exercising, whatever the "
@@ -136,16 +149,23 @@ def observe(people, pressure_kpa: np.ndarray | None, pitch_m: float) -> list[Obs
     return out
 
 
+def length_m(moments: np.ndarray) -> float:
+    """Pressure length (m): four standard deviations along the major axis, from the moments (6,); 0 when empty."""
+    m = moments
+    if m[0] <= 0:
+        return 0.0
+    mx, my = m[1] / m[0], m[2] / m[0]
+    cxx, cyy, cxy = m[3] / m[0] - mx * mx, m[4] / m[0] - my * my, m[5] / m[0] - mx * my
+    major = 0.5 * (cxx + cyy) + np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy ** 2)
+    return 4.0 * float(np.sqrt(max(major, 0.0)))
+
+
 def _body(members: list[Observation]) -> BodyFeatures:
     force = float(sum(o.force_n for o in members))
     area = float(sum(o.area_m2 for o in members))
     m = np.sum([o.moments for o in members], axis=0)
     if m[0] > 0:
-        mx, my = m[1] / m[0], m[2] / m[0]
-        cxx, cyy, cxy = m[3] / m[0] - mx * mx, m[4] / m[0] - my * my, m[5] / m[0] - mx * my
-        major = 0.5 * (cxx + cyy) + np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy ** 2)
-        return BodyFeatures(tuple(o.track_id for o in members), force, area, 4.0 * float(np.sqrt(max(major, 0.0))),
-                            np.array([mx, my]))
+        return BodyFeatures(tuple(o.track_id for o in members), force, area, length_m(m), np.array([m[1], m[2]]) / m[0])
     centre = np.average([o.centre_m for o in members], axis=0, weights=[max(o.force_n, 1e-6) for o in members])
     return BodyFeatures(tuple(o.track_id for o in members), force, area, 0.0, centre)
 
@@ -193,6 +213,7 @@ class _Episode:
     fall: bool = False
     down: bool = False
     fall_conf: float = 0.0
+    judged: bool = False
 
 
 class FallDetector:
@@ -204,6 +225,7 @@ class FallDetector:
         self._feet: deque = deque()  # (t_s, centre (2,)) of bodies on their feet, the last down_window_s
         self._episodes: list[_Episode] = []
         self._standing_since: dict[int, float] = {}
+        self._born: dict[int, float] = {}  # when each present track first appeared
         self.raised = {"fall": 0, "person_down": 0}
 
     # ------------------------------------------------------------------ per frame
@@ -219,12 +241,19 @@ class FallDetector:
         c = self.config
         standing = {}
         for o in obs:  # how long each track has stood on its feet (a person's load on a small footprint)
-            if o.area_m2 <= c.feet_max_area_m2 and o.force_n >= c.person_min_force_n:
+            if (o.area_m2 <= c.feet_max_area_m2 and o.force_n >= c.person_min_force_n
+                    and length_m(o.moments) <= c.feet_max_length_m):  # a lying trunk's long print is not feet
                 standing[o.track_id] = self._standing_since.get(o.track_id, t_s)
         self._standing_since = standing
+        born = {o.track_id: self._born.get(o.track_id, t_s) for o in obs}
+        self._born = born
+
+        def part_of_a_fall(o: Observation) -> bool:  # a track that appeared where someone already lies
+            return any(born[o.track_id] >= ep.start_t and np.linalg.norm(o.centre_m - ep.centre_m) <= c.merge_radius_m
+                       for ep in self._episodes)
 
         def apart(a: Observation, b: Observation) -> bool:  # two people standing side by side stay two
-            return all(t_s - standing.get(o.track_id, t_s) >= STANDING_APART_S for o in (a, b))
+            return all(t_s - standing.get(o.track_id, t_s) >= STANDING_APART_S and not part_of_a_fall(o) for o in (a, b))
 
         return self.step(t_s, merge(obs, c.merge_radius_m, apart), activities)
 
@@ -236,21 +265,19 @@ class FallDetector:
             self._feet.popleft()
         seen: set[int] = set()
         for b in bodies:
-            ep = self._episode_near(b) if b.force_n >= c.person_min_force_n else None
-            if ep is not None and b.area_m2 < c.floor_stay_min_area_m2:
+            person = b.force_n >= c.person_min_force_n  # lighter: a pet, a bag, a hand on the carpet
+            floor = person and self._lying(b)
+            ep = self._episode_near(b) if person else None
+            if ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2:
                 ep = None  # up again (or never down): the episode ends after release_s
             if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
                                and b.length_m <= c.feet_max_length_m):
                 self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
                 continue
-            if b.force_n < c.person_min_force_n:
-                continue  # a pet, a bag, a hand on the carpet
-            floor = b.length_m >= c.floor_min_length_m and (
-                b.area_m2 >= c.floor_min_area_m2 or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2))
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
             if ep is None:
-                ep = _Episode(t_s, t_s, b.centre_m, self._arrival(t_s, b), set(b.track_ids), area_m2=b.area_m2)
+                ep = _Episode(t_s, t_s, b.centre_m, None, set(b.track_ids), area_m2=b.area_m2)
                 self._episodes.append(ep)
             moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
                       or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
@@ -275,7 +302,7 @@ class FallDetector:
         events = []
         for ep in self._episodes:
             events += self._clear(ep, t_s, reason)
-        self._episodes, self._feet, self._standing_since = [], deque(), {}
+        self._episodes, self._feet, self._standing_since, self._born = [], deque(), {}, {}
         return events
 
     @property
@@ -293,19 +320,60 @@ class FallDetector:
                 best, dist = ep, min(d, dist)
         return best
 
-    def _arrival(self, t_s: float, b: BodyFeatures) -> float | None:
-        """Seconds since this load stood on its feet nearby (see the module doc); None: not within down_window_s."""
+    def _lying(self, b: BodyFeatures) -> bool:
+        """A person's body on the floor: a large or a long footprint, pressed like an adult's weight (not a pet's)."""
         c = self.config
-        for t, centre, force in reversed(self._feet):
-            d = float(np.linalg.norm(centre - b.centre_m))
-            if d <= c.fall_radius_m and b.force_n <= c.max_load_ratio * force:  # lighter: mid-air, not standing
-                return t_s - t if d >= c.min_shift_m else None  # the last time they stood: did the load move?
+        return (b.length_m >= c.floor_min_length_m and b.force_n >= 1e3 * c.floor_min_kpa * b.area_m2
+                and (b.area_m2 >= c.floor_min_area_m2
+                     or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2
+                         and b.force_n <= 1e3 * c.floor_long_max_kpa * b.area_m2)))
+
+    def _arrival(self, start_t: float, b: BodyFeatures) -> float | None:
+        """Seconds from the last stance nearby to landing at start_t, judged from where the landed body ``b``
+        lies (see the module doc); None: no fall-like arrival within down_window_s."""
+        c = self.config
+        near = [r for r in self._feet if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
+        runs: list[list] = []  # stances, newest first: stretches of on-the-feet readings without a gap
+        for r in reversed(near):
+            if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
+                runs.append([])
+            runs[-1].append(r)
+        for run in runs:
+            end_t = run[0][0]
+            if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
+                where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
+                return start_t - end_t if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m else None
+            if self._seated(run, b):  # feet under a chair: the whole weight came down onto the floor
+                return start_t - end_t
+            # lighter than the body now lying and not seated: the body in the air, a hand: look further back
         return None
+
+    def _seated(self, run: list, b: BodyFeatures) -> bool:
+        """Someone seated on a chair beside the carpet: a footprint held still and steady (within SEATED_STILL_M of
+        where it mostly was, its load within SEATED_STEADY of its usual) for seated_s without a break, carrying at
+        most 1/seated_load_ratio of the load now lying on the floor. A squat or a hand going down keeps moving."""
+        c = self.config
+        where = np.median([r[1] for r in run], axis=0)
+        near = [np.linalg.norm(r[1] - where) <= SEATED_STILL_M for r in run]
+        if not any(near):
+            return False
+        usual = float(np.median([r[2] for r, n in zip(run, near) if n]))
+        best, first = 0.0, None  # the longest unbroken still, steady stretch (run is newest first)
+        for r, n in zip(run, near):
+            if n and abs(r[2] - usual) <= SEATED_STEADY * usual:
+                first = r[0] if first is None else first
+                best = max(best, first - r[0])
+            else:
+                first = None
+        return best >= c.seated_s and b.force_n >= c.seated_load_ratio * usual
 
     def _advance(self, ep: _Episode, t_s: float, b: BodyFeatures) -> list[dict]:
         c, out = self.config, []
         held = t_s - ep.start_t
         tid = min(ep.track_ids)
+        if not ep.judged and held >= c.confirm_s:  # judged once landed: from where the body now lies
+            ep.judged = True
+            ep.arrival_s = self._arrival(ep.start_t, b)
         if not ep.fall and ep.arrival_s is not None and ep.arrival_s <= c.fall_window_s and held >= c.confirm_s:
             ep.fall = True
             ep.fall_conf = round(float(np.clip(1.0 - 0.5 * ep.arrival_s / max(c.fall_window_s, 1e-6), 0.5, 1.0)), 3)

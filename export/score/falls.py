@@ -25,6 +25,14 @@ import numpy as np
 from edge.scene.falls import FallConfig, FallDetector, Observation
 
 SCHEMA = "cavatar.falls-score/1"
+PATHS = {
+    "board": "the board's: simulated bodies → contact model → the virtual carpet's sensor model (raw counts: noise, "
+             "saturation, crosstalk, hysteresis, faults) → the runtime's calibration step (the scripted installer "
+             "session's calibration of that carpet) → the runtime's SceneTracker → edge.scene.falls. Not through the "
+             "wire protocol and frame assembly (lossless on the virtual carpet).",
+    "clean": "clean pressure: simulated bodies → contact model (no sensor noise, no calibration) → the runtime's "
+             "SceneTracker → edge.scene.falls.",
+}
 DETECT_AFTER_IMPACT_S = 10.0
 DOWN_SLACK_S = 2.0
 
@@ -145,8 +153,7 @@ def markdown(result: dict[str, Any]) -> str:
         f"(there: {result.get('tuning_set', {}).get('detected_pct', '—')} % of "
         f"{result.get('tuning_set', {}).get('falls', '—')} falls, {result.get('tuning_set', {}).get('false_alarms', '—')} "
         f"false alarms in {result.get('tuning_set', {}).get('ordinary_hours', '—')} h).", "",
-        "Path: simulated bodies → contact model (clean pressure: no sensor noise, no calibration) → the runtime's "
-        "SceneTracker → edge.scene.falls. The model's activity is not used (pressure alone).", "",
+        f"Path: {PATHS.get(result.get('path'), result.get('path'))} The model's activity is not used (pressure alone).", "",
         "| target | measured | target met |", "|---|---|---|",
         f"| falls detected ≥ 97 % | {s['detected_pct']} % of {s['falls']} | {'yes' if t['detected'] else 'no'} |",
         f"| median delay from impact ≤ 3 s | {s['median_delay_s']} s (p90 {s['p90_delay_s']} s) | "
@@ -228,6 +235,10 @@ def main(argv=None) -> int:
                           "person_down": s["person_down_in_time_pct"] >= 97.0,
                           "false_alarms": s["false_alarms_per_24h"] <= 1.0}}
     result["seeds"] = sorted({c["seed"] for c in clips})
+    paths = sorted({c.get("path", "clean") for c in clips})
+    if len(paths) != 1:
+        raise SystemExit(f"{a.clips}: clips from several paths {paths}; simulate them again into one file")
+    result["path"] = paths[0]
     if a.tuned_on:
         tuning = load_clips(a.tuned_on)
         t = score(tuning, config)

@@ -79,8 +79,35 @@ def _people(clip: Clip, body, rng):
     return [(tr, np.ones(len(tr)))], {"scenario": clip.what, "fall": False}, clip.seconds
 
 
-def clip_features(clip: Clip, body) -> dict:
-    """Run one clip through contact → SceneTracker → body_features (see the module doc)."""
+class BoardPath:
+    """The board's path for one clip: the carpet's sensor model (raw counts: noise, saturation, crosstalk,
+    hysteresis, faults) of ``sim://?seed=SEED``, then the runtime's calibration step with the calibration
+    the scripted installer session made on that same carpet (cached in ``cal_dir``, one per seed)."""
+
+    def __init__(self, seed: int, cal_dir) -> None:
+        from pathlib import Path
+
+        from calibration.file import Calibration
+        from calibration.runtime import CalibratedFrames
+        from edge.runtime.carpet_calibration import run_sim_session, sim_calibration_path
+        from sim.live import live_sensor
+
+        path = sim_calibration_path(Path(cal_dir), seed, GRID)
+        cal = Calibration.load(path) if path.exists() else run_sim_session(seed, GRID, 12, PITCH_M * 1e3, path)
+        self.sensor = live_sensor(seed, GRID)  # a fresh carpet of the same seed: its clock starts at 0
+        self.step = CalibratedFrames(cal)
+
+    def __call__(self, pressure_kpa: np.ndarray, t_s: float):
+        """True pressure → (calibrated pressure kPa or None when refused, masked sensels or None)."""
+        out = self.step.process(self.sensor.counts(pressure_kpa, t_s), t_s)
+        if out.rejected is not None:
+            return None, None
+        return out.pressure_kpa, (out.masked if out.masked.any() else None)
+
+
+def clip_features(clip: Clip, body, path: str = "board", cal_dir="out/falls") -> dict:
+    """Run one clip through contact → [sensor → calibration] → SceneTracker → observations (module doc).
+    path: "board" (raw counts and calibration, as on the board) or "clean" (the contact model's pressure)."""
     from edge.scene.falls import observe
     from edge.scene.pipeline import SceneTracker
     from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
@@ -112,6 +139,7 @@ def clip_features(clip: Clip, body) -> dict:
         v = body.forward(tr.pose_aa[:n], tr.betas, tr.transl_m[:n], vertices=True)["vertices"]
         verts.append((v, mass, load))
     st = SceneTracker(GRID, GRID, PITCH_M)
+    board = BoardPath(clip.seed, cal_dir) if path == "board" else None
     frames = []
     t0 = time.perf_counter()
     for k in range(n):
@@ -123,12 +151,15 @@ def clip_features(clip: Clip, body) -> dict:
                                          tissue_kpa_per_mm=tissue).pressure_kpa
         for o in objects:
             p += o.pressure_kpa(t, GRID, GRID, PITCH_M)
-        sf = st.update(p, t)
-        obs = observe(sf.people, sf.pressure_kpa, PITCH_M) if sf.valid else []
+        masks = None
+        if board is not None:
+            p, masks = board(p, t)
+        sf = st.update(p, t, masks=masks) if p is not None else None
+        obs = observe(sf.people, sf.pressure_kpa, PITCH_M) if sf is not None and sf.valid else []
         frames.append([[o.track_id, round(o.force_n, 2), round(o.area_m2, 6), [round(float(x), 5) for x in o.centre_m],
                         [float(f"{x:.7g}") for x in o.moments]] for o in obs])
     return {"name": clip.name, "kind": clip.kind, "what": clip.what, "seed": clip.seed, "truth": truth,
-            "seconds": round(n / RATE_HZ, 3), "frames": frames, "sim_s": round(time.perf_counter() - t0, 1)}
+            "seconds": round(n / RATE_HZ, 3), "path": path, "frames": frames, "sim_s": round(time.perf_counter() - t0, 1)}
 
 
 def main(argv=None) -> int:
@@ -144,6 +175,9 @@ def main(argv=None) -> int:
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--ordinary-s", type=float, default=30.0)
     ap.add_argument("--only", choices=("falls", "negatives"))
+    ap.add_argument("--path", choices=("board", "clean"), default="board",
+                    help="board: sensor model raw counts → calibration (default); clean: the contact model's pressure")
+    ap.add_argument("--cal-dir", default="out/falls", help="where the virtual carpets' calibrations are kept")
     a = ap.parse_args(argv)
     body = BodyModel.load("lite")
     out = Path(a.out)
@@ -155,7 +189,7 @@ def main(argv=None) -> int:
         if clip.name in done:
             continue
         try:
-            got = clip_features(clip, body)
+            got = clip_features(clip, body, a.path, a.cal_dir)
         except ValueError as exc:  # a scene that does not fit on the carpet: say so, go on
             print(f"{clip.name}: skipped ({exc})", flush=True)
             continue

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, body_features
+from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
 from edge.runtime.events import EventStage
 
 RATE = 14.0
@@ -113,6 +113,88 @@ def test_a_dropped_bag_or_a_pet_beside_someone_standing_raises_nothing():
     cat = [(3.0, [body([6], a, force_n=49, area_m2=0.004, length_m=0.3)]),
            (40.0, [body([6], a + (0.6, 0.0), force_n=49, area_m2=0.06, length_m=0.3)])]
     assert run(cat)[0] == []
+
+
+def kinds(ev):
+    return [(k, s) for k, s, _, _ in ev]
+
+
+def test_a_fall_is_judged_where_the_body_settles_not_where_it_first_touched():
+    """The trunk first touches 0.2 m from the feet (still landing) and comes to rest 0.7 m away: a fall."""
+    a = np.array([0.9, 0.4])
+    script = [(3.0, [body([1], a, **FEET)]), (0.15, [body([2], a + (0, 0.2), **LYING)]),
+              (34.0, [body([2], a + (0, 0.7), **LYING)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+SEATED = dict(force_n=110.0, area_m2=0.012, length_m=0.3)  # on a chair beside the carpet: only the feet on it
+
+
+def test_falling_off_a_chair_beside_the_carpet_is_a_fall_wherever_it_lands():
+    """Seated 6 s (a light, still footprint), then the whole body on the floor 0.3 m from the feet."""
+    a = np.array([0.9, 0.4])
+    script = [(6.0, [body([1], a, **SEATED)]), (0.5, []), (34.0, [body([2], a + (0, 0.3), **LYING)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert ev[0][2] - 6.5 <= 1.0
+
+
+def test_a_squat_with_a_hand_going_down_then_lying_is_no_fall():
+    """A light footprint (saturated forefeet, a hand) that keeps moving is no one seated: lying down beside it is
+    deliberate, as is the same after a still seat whose load the lying body does not exceed 3.5 times."""
+    a = np.array([0.9, 0.4])
+    squat = [(1 / RATE, [body([1], a + (0, 0.002 * k), force_n=200.0 * (1 + 0.35 * np.sin(2 * np.pi * k / RATE)),
+                              area_m2=0.012, length_m=0.3)]) for k in range(42)]  # weight shifting onto a hand
+    ev, _ = run(squat + [(34.0, [body([2], a + (0, 0.3), force_n=800.0, area_m2=0.09, length_m=0.75)])])
+    assert ev == []
+    heavy_seat = dict(SEATED, force_n=300.0)
+    ev, _ = run([(6.0, [body([1], a, **heavy_seat)]), (0.5, []), (34.0, [body([2], a + (0, 0.3), **LYING)])])
+    assert ev == []
+
+
+def test_a_deep_lunge_is_long_but_not_lying():
+    """Two feet 0.8 m apart print 1.6 m long at ≈ 15 kPa; a body that long lying spreads its weight (≈ 8 kPa)."""
+    a = np.array([0.9, 0.4])
+    lunge = dict(force_n=500.0, area_m2=0.032, length_m=1.65)
+    assert run([(3.0, [body([1], a, **FEET)]), (30.0, [body([1], a + (0, 0.5), **lunge)])])[0] == []
+    long_lying = dict(force_n=280.0, area_m2=0.035, length_m=1.65)
+    ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.5, []), (34.0, [body([2], a + (0, 0.8), **long_lying)])])
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_heavy_dog_trotting_over_and_lying_down_is_not_a_person():
+    """30 kg trots in from 0.7 m away and lies down: 290 N over 0.12 m² (≈ 2.4 kPa) is no adult lying."""
+    a = np.array([0.9, 0.4])
+    trot = [(0.2, [body([5], a + (0.0, 0.1 * k), force_n=290, area_m2=0.01, length_m=0.4)]) for k in range(8)]
+    assert run(trot + [(40.0, [body([5], a + (0.0, 0.8), force_n=290, area_m2=0.12, length_m=0.5)])])[0] == []
+
+
+def ob(tid, force_n, area_m2, xy, length_m):
+    """An observation whose pressure moments give a print length_m long along x (two equal halves)."""
+    x, y = xy
+    h = length_m / 4.0
+    w = force_n / 2.0
+    xs = np.array([x - h, x + h])
+    m = np.array([force_n, w * xs.sum(), force_n * y, w * (xs ** 2).sum(), force_n * y * y, w * xs.sum() * y])
+    return Observation(tid, force_n, area_m2, np.array([x, y], float), m)
+
+
+def test_a_lying_body_seen_as_two_tracks_stays_one_body_and_one_fall():
+    """After the landing the scene splits the body: a long trunk print and a short one that looks like feet.
+    A track that appears where someone already lies is part of them, not a second person standing there."""
+    det = FallDetector()
+    events, t = [], 0.0
+    for k in range(int(3 * RATE)):
+        events += det.step_observations(t, [ob(1, 350.0, 0.03, (1.0, 0.8), 0.5)], {})
+        t += 1 / RATE
+    for k in range(int(40 * RATE)):
+        parts = [ob(1, 225.0, 0.038, (0.2, 0.65), 1.44)]
+        if k >= 7:  # the second track is born half a second after the landing
+            parts.append(ob(2, 290.0, 0.03, (0.6, 0.9), 0.23))
+        events += det.step_observations(t, parts, {})
+        t += 1 / RATE
+    assert [(e["type"], e["state"]) for e in events] == [("fall", "raised"), ("person_down", "raised")]
 
 
 def test_person_down_delay_is_configurable():
