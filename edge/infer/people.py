@@ -43,8 +43,7 @@ from edge.infer.tracks import PersonResult, TrackBook, TrackState
 from edge.infer.window import FeatureWindow
 
 if TYPE_CHECKING:  # types only: inference reads the scene's handover, never the scene itself
-    from edge.scene.handover import PeopleHandover
-    from edge.scene.pipeline import PersonObservation
+    from edge.scene.handover import PeopleHandover, PersonObservation
 
 # The counts a step reports (all present in every step, most often 0).
 WORK = ("person_frames", "encoder_runs", "head_runs", "still_reuses", "tracks_started", "tracks_freed",

@@ -18,12 +18,33 @@ Inference needs three things and reads nothing else of the scene:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from edge.scene.pipeline import PersonObservation
+
+@dataclass(frozen=True, slots=True)
+class PersonObservation:
+    """One confirmed person in one frame.
+
+    cop_m, force_n: one-euro filtered centre of pressure (x, y in the carpet frame) and total force;
+    cop_raw_m, force_raw_n: this frame's measurement, integrated over ``mask`` on the pressure before
+    the spatial filters (the 3×3 median erodes thin contacts); area_m2: contact area;
+    mask: (H, W) bool, the person's contacts grown by mask_margin_mm; bbox: (rows, cols) slices of the mask;
+    still: pressure under the person unchanged within noise since their last non-still frame.
+    """
+
+    track_id: int
+    cop_m: np.ndarray
+    force_n: float
+    cop_raw_m: np.ndarray
+    force_raw_n: float
+    area_m2: float
+    velocity_m_s: np.ndarray
+    mask: np.ndarray
+    bbox: tuple[slice, slice]
+    contacts: int
+    still: bool
+    age_s: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,4 +56,4 @@ class PeopleHandover:
     held_track_ids: frozenset[int]
 
 
-__all__ = ["PeopleHandover"]
+__all__ = ["PeopleHandover", "PersonObservation"]
