@@ -10,6 +10,7 @@ from edge.body import BodyModel
 from sim.motion import activities as acts
 from sim.motion.activities import ACTIVITIES, FEET, STANDING, mirror
 from sim.motion.keys import BASE, Timeline, contacts, pose
+from sim.motion.pace import Pacer
 from sim.motion.rig import (
     CONTACT_PARTS, J, LF, RF, UPRIGHT, Rig, euler_deg_to_matrix, matrix_to_rotvec, rot_z,
 )
@@ -242,7 +243,9 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
         if name == "walking":
             tl = _walking(style, rng, seconds_per_activity, label, rig, walk_radius_m, head, walk_line)
         else:
-            tl = acts.BUILDERS[name](style, rng, seconds_per_activity, label)
+            limit = acts.VERTICAL_ACC_LIMIT_M_S2.get(name)
+            pacer = None if limit is None else Pacer(rig, limit)
+            tl = acts.BUILDERS[name](style, rng, seconds_per_activity, label, pace=pacer)
         euler, heading, contact, anchor, heel, lab = tl.sample(n_seg, rate_hz, BASE, head)
         head = head + sum(k.turn_rad for k in tl.keys)
         parts.append((euler, heading, contact, anchor, heel, lab))
