@@ -344,7 +344,7 @@ def sit_up(style, rng, seconds, label, pace=None):
     def body(tl, left):
         _get_down(tl, style, label, sit_bent, sit, BUTT)
         tl.add(1.6 * style.tempo, lie_bent, sit, BUTT, label=label)
-        tl.add(0.2, lie_bent, lie, BUTT, label=label)
+        tl.add(0.4, lie_bent, lie, BUTT, label=label)  # the back settles on the floor before the first curl
 
         def rep(t):
             a = _u(rng, 0.75, 1.05)

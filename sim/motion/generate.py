@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -207,6 +207,17 @@ def _u(rng, lo, hi):
 
 # ----------------------------------------------------------------------------- one person
 
+ACTIVITY_AMPLITUDE_SD = 0.3  # log-normal spread of one person's range of motion from one activity to the next
+
+
+def _for_activity(style: Style, rng) -> Style:
+    """The subject's style for one activity: people move through a larger range in some
+    activities than in others (a person's overall amplitude alone spread the peak joint
+    angles by only 2–9 % between people; issue 13). Templates cap what a joint can reach."""
+    amp = style.amplitude * np.exp(rng.normal(0.0, ACTIVITY_AMPLITUDE_SD))
+    return replace(style, amplitude=float(np.clip(amp, 0.55, 1.5)))
+
+
 def _sway(n, rate_hz, style, rng):
     t = np.arange(n) / rate_hz
     out = np.zeros((n, 24, 3))
@@ -240,6 +251,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
         if name not in ACTIVITIES:
             raise ValueError(f"unknown activity {name!r}; expected one of {ACTIVITIES}")
         label = ACTIVITIES.index(name)
+        style = subject.style if name == "push_up" else _for_activity(subject.style, rng)  # the hop needs the person's own
         if name == "walking":
             tl = _walking(style, rng, seconds_per_activity, label, rig, walk_radius_m, head, walk_line)
         else:
