@@ -192,8 +192,15 @@ def squat(style, rng, seconds, label, pace=None):
     return _frame(style, rng, seconds, label, body, pace=pace)
 
 
+TWIST_ARMS = (  # how people hold their arms while they twist
+    pose(left_shoulder=(-20, 0, -55), right_shoulder=(-20, 0, 55), left_elbow=(0, -95, 0), right_elbow=(0, 95, 0)),  # elbows bent
+    pose(left_shoulder=(0, 0, -50), right_shoulder=(0, 0, 50), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0)),  # hands on the hips
+    pose(left_shoulder=(-10, -80, 0), right_shoulder=(-10, 80, 0), left_elbow=(0, 0, 0), right_elbow=(0, 0, 0)),  # arms out in front
+)
+
+
 def twisting(style, rng, seconds, label, pace=None):
-    arms = pose(left_shoulder=(-20, 0, -55), right_shoulder=(-20, 0, 55), left_elbow=(0, -95, 0), right_elbow=(0, 95, 0))
+    arms = TWIST_ARMS[int(rng.integers(len(TWIST_ARMS)))]
 
     def body(tl, left):
         tl.add(0.5 * style.tempo, arms, FEET, LF, label=label)
