@@ -251,7 +251,8 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
         if name not in ACTIVITIES:
             raise ValueError(f"unknown activity {name!r}; expected one of {ACTIVITIES}")
         label = ACTIVITIES.index(name)
-        style = subject.style if name == "push_up" else _for_activity(subject.style, rng)  # the hop needs the person's own
+        # the push-up's hop and the walking gait's heel strike need the person's own amplitude
+        style = subject.style if name in ("push_up", "walking") else _for_activity(subject.style, rng)
         if name == "walking":
             tl = _walking(style, rng, seconds_per_activity, label, rig, walk_radius_m, head, walk_line)
         else:
