@@ -1,10 +1,12 @@
 """The activities as keyframe timelines (one segment each, standing → activity → standing).
 
-Every builder has the signature ``build(style, rng, seconds, label) -> Timeline``: the
+Every builder has the signature ``build(style, rng, seconds, label, pace=None) -> Timeline``: the
 timeline starts from and returns to ``keys.BASE`` with both feet down, fills exactly
 ``seconds`` and labels its frames (``label`` for the activity, "standing" for the lead-in
 and lead-out). ``style`` is the subject's ``Style`` (tempo, amplitude, asymmetry, lead
-side); ``rng`` draws the per-repetition variety.
+side); ``rng`` draws the per-repetition variety; ``pace`` (a ``sim.motion.pace.Pacer``)
+lengthens keys that would move the centre of mass up or down faster than
+``VERTICAL_ACC_LIMIT_M_S2`` allows for the activity.
 """
 
 from __future__ import annotations
@@ -21,6 +23,15 @@ ACTIVITIES = (
     "sitting", "push_up", "sit_up", "walking", "standing",
 )
 STANDING = ACTIVITIES.index("standing")
+# Largest vertical COM acceleration a key may ask for (m/s²). Controlled exercises keep the
+# floor force within ~0.9–1.1 × body weight (issue 13): under 0.1 g. The limit keeps a margin
+# for the template poses' height change running up to ~10 % short of the grounded body's
+# (feet flattened and locked by IK) and for repetitions squeezed by up to ~10 % to fill the
+# sequence (acceleration ∝ 1/T²). Stepping and lunging move the body more briskly
+# (~0.8–1.2 × mg). Not paced: the push-up and the sit-up, whose getting down and up must fit
+# the sequence anyway (a slower descent only squeezes the rest; measured, it did not help).
+VERTICAL_ACC_LIMIT_M_S2 = {a: 0.62 for a in ("bending", "squat", "twisting", "raising_arms", "sitting", "standing")} | {
+    "stepping": 1.6, "turning": 1.6, "lunge": 1.6}
 FEET = both_feet()
 
 _LR = [(J[n], J[n.replace("left_", "right_")]) for n in (
@@ -68,9 +79,10 @@ MAX_BEND_SCALE = 1.1  # of the bending template (trunk 72° forward)
 MAX_STRETCH = 1.12  # an activity's keys last at most this much longer than the subject's tempo makes them
 
 
-def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 0.9)):
-    """Standing lead-in, the body of the activity stretched to fit, standing lead-out."""
-    tl = Timeline()
+def _frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_out=(0.4, 0.9), pace=None):
+    """Standing lead-in, the body of the activity stretched to fit, standing lead-out (pace:
+    an optional ``sim.motion.pace.Pacer`` that sets the keys' shortest durations)."""
+    tl = Timeline(pace=pace)
     a, b = _u(rng, *lead_in), _u(rng, *lead_out)
     a, b = min(a, 0.15 * seconds), min(b, 0.15 * seconds)
     tl.add(a, BASE, FEET, LF, label=STANDING)
@@ -112,7 +124,7 @@ def _step(tl, style, rng, side, label, lift=(35, 50), turn=0.0, dur=0.8):
     tl.add(0.10 * dur, BASE, FEET, stance, label=label)
 
 
-def stepping(style, rng, seconds, label):
+def stepping(style, rng, seconds, label, pace=None):
     def body(tl, left):
         side = [LF if style.lead == 0 else RF]
 
@@ -120,10 +132,10 @@ def stepping(style, rng, seconds, label):
             _step(t, style, rng, side[0], label)
             side[0] = RF if side[0] == LF else LF
         _reps(tl, rep, left, rng, min_reps=2)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def turning(style, rng, seconds, label):
+def turning(style, rng, seconds, label, pace=None):
     def body(tl, left):
         side = [LF]
 
@@ -137,10 +149,10 @@ def turning(style, rng, seconds, label):
                 side[0] = RF if side[0] == LF else LF
             t.add(_u(rng, 0.2, 0.6), BASE, FEET, LF if side[0] == RF else RF, label=label)
         _reps(tl, rep, left, rng)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def bending(style, rng, seconds, label):
+def bending(style, rng, seconds, label, pace=None):
     def body(tl, left):
         def rep(t):
             a = _u(rng, 0.6, 1.05)
@@ -156,10 +168,10 @@ def bending(style, rng, seconds, label):
             t.add(_u(rng, 0.1, 0.6), styled(down, style, a * 1.03), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
         _reps(tl, rep, left, rng)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def squat(style, rng, seconds, label):
+def squat(style, rng, seconds, label, pace=None):
     def body(tl, left):
         def rep(t):
             a = _u(rng, 0.7, 1.0)
@@ -177,11 +189,18 @@ def squat(style, rng, seconds, label):
             t.add(_u(rng, 0.1, 0.5), styled(down, style, a), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
         _reps(tl, rep, left, rng)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def twisting(style, rng, seconds, label):
-    arms = pose(left_shoulder=(-20, 0, -55), right_shoulder=(-20, 0, 55), left_elbow=(0, -95, 0), right_elbow=(0, 95, 0))
+TWIST_ARMS = (  # how people hold their arms while they twist
+    pose(left_shoulder=(-20, 0, -55), right_shoulder=(-20, 0, 55), left_elbow=(0, -95, 0), right_elbow=(0, 95, 0)),  # elbows bent
+    pose(left_shoulder=(0, 0, -50), right_shoulder=(0, 0, 50), left_elbow=(0, -100, 0), right_elbow=(0, 100, 0)),  # hands on the hips
+    pose(left_shoulder=(-10, -80, 0), right_shoulder=(-10, 80, 0), left_elbow=(0, 0, 0), right_elbow=(0, 0, 0)),  # arms out in front
+)
+
+
+def twisting(style, rng, seconds, label, pace=None):
+    arms = TWIST_ARMS[int(rng.integers(len(TWIST_ARMS)))]
 
     def body(tl, left):
         tl.add(0.5 * style.tempo, arms, FEET, LF, label=label)
@@ -195,10 +214,10 @@ def twisting(style, rng, seconds, label):
             t.add(0.15, arms, FEET, LF, label=label)
         _reps(tl, rep, left - 1.0, rng)
         tl.add(0.5 * style.tempo, BASE, FEET, LF, label=label)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def raising_arms(style, rng, seconds, label):
+def raising_arms(style, rng, seconds, label, pace=None):
     def body(tl, left):
         def rep(t):
             a = _u(rng, 0.8, 1.05)
@@ -216,10 +235,10 @@ def raising_arms(style, rng, seconds, label):
             t.add(_u(rng, 0.2, 0.8), styled(up, style, a), FEET, LF, label=label)
             t.add(0.45 * d, BASE, FEET, LF, label=label)
         _reps(tl, rep, left, rng)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def lunge(style, rng, seconds, label):
+def lunge(style, rng, seconds, label, pace=None):
     style = replace(style, amplitude=float(np.clip(style.amplitude, 0.85, 1.1)))  # a lunge needs a long split stance
     def body(tl, left):
         side = [style.lead]
@@ -251,7 +270,7 @@ def lunge(style, rng, seconds, label):
             t.add(0.3 * tm, BASE, FEET, back, label=label)
             side[0] = 1 - side[0]
         _reps(tl, rep, left, rng)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
 # ----------------------------------------------------------------------------- floor activities
@@ -287,7 +306,7 @@ def _get_up(tl, style, label, from_pose, from_contact, from_anchor):
     tl.add(1.6 * tm, BASE, FEET, LF, label=label)
 
 
-def sitting(style, rng, seconds, label):
+def sitting(style, rng, seconds, label, pace=None):
     sit_bent = styled(SIT_BENT, style)  # how deep this person folds: hips, knees, lean
     sit = contacts(BUTT, LF, RF)
 
@@ -310,7 +329,7 @@ def sitting(style, rng, seconds, label):
             t.add(0.5 * d, sit_bent, sit, BUTT, label=label)
         _reps(tl, rep, left - 6.4 * style.tempo, rng)
         _get_up(tl, style, label, sit_bent, sit, BUTT)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
 LIE_BENT = pose(root=(-88, 0, 0), left_hip=(-50, 0, 8), right_hip=(-50, 0, -8),
@@ -323,7 +342,7 @@ CURL_UP = pose(root=(-30, 0, 0), left_hip=(-100, 0, 8), right_hip=(-100, 0, -8),
                neck=(20, 0, 0))
 
 
-def sit_up(style, rng, seconds, label):
+def sit_up(style, rng, seconds, label, pace=None):
     sit_bent, lie_bent = styled(SIT_BENT, style), styled(LIE_BENT, style)
     curl = styled(CURL_UP, style, 1.0, LIE_BENT)  # how far this person curls up
     sit = contacts(BUTT, LF, RF)
@@ -332,7 +351,7 @@ def sit_up(style, rng, seconds, label):
     def body(tl, left):
         _get_down(tl, style, label, sit_bent, sit, BUTT)
         tl.add(1.6 * style.tempo, lie_bent, sit, BUTT, label=label)
-        tl.add(0.2, lie_bent, lie, BUTT, label=label)
+        tl.add(0.4, lie_bent, lie, BUTT, label=label)  # the back settles on the floor before the first curl
 
         def rep(t):
             a = _u(rng, 0.75, 1.05)
@@ -345,7 +364,7 @@ def sit_up(style, rng, seconds, label):
         _reps(tl, rep, left - 9.6 * style.tempo, rng)
         tl.add(1.6 * style.tempo, sit_bent, sit, BUTT, label=label)
         _get_up(tl, style, label, sit_bent, sit, BUTT)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
 # Push-up: hands flat under the shoulders, body straight on the toes.
@@ -361,7 +380,7 @@ HOP = pose(CROUCH_HANDS, left_hip=(-45, 0, 8), right_hip=(-45, 0, -8), left_knee
 _TOES = 72.0
 
 
-def push_up(style, rng, seconds, label):
+def push_up(style, rng, seconds, label, pace=None):
     """Down to a crouch with the hands on the floor, hop both feet back into a plank (hands
     carry the body meanwhile), push-ups, hop the feet forward again, stand up."""
     squat_low, crouch_hands = crouch(SQUAT_LOW, style), crouch(CROUCH_HANDS, style)
@@ -394,17 +413,17 @@ def push_up(style, rng, seconds, label):
         tl.add(0.2 * tm, crouch_hands, FEET, LF, label=label)
         tl.add(1.0 * tm, squat_low, FEET, LF, label=label)
         tl.add(1.6 * tm, BASE, FEET, LF, label=label)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
-def standing(style, rng, seconds, label):
+def standing(style, rng, seconds, label, pace=None):
     def body(tl, left):
         n = max(1, int(left // 2.0))
         for _ in range(n):
             p = pose(spine2=(_u(rng, -3, 3), _u(rng, -8, 8), 0), neck=(_u(rng, -10, 10), _u(rng, -25, 25), 0))
             tl.add(left / n * 0.5, p, FEET, LF, label=label)
             tl.add(left / n * 0.5, BASE, FEET, LF, label=label)
-    return _frame(style, rng, seconds, label, body)
+    return _frame(style, rng, seconds, label, body, pace=pace)
 
 
 BUILDERS = {

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -10,6 +10,7 @@ from edge.body import BodyModel
 from sim.motion import activities as acts
 from sim.motion.activities import ACTIVITIES, FEET, STANDING, mirror
 from sim.motion.keys import BASE, Timeline, contacts, pose
+from sim.motion.pace import Pacer
 from sim.motion.rig import (
     CONTACT_PARTS, J, LF, RF, UPRIGHT, Rig, euler_deg_to_matrix, matrix_to_rotvec, rot_z,
 )
@@ -206,6 +207,17 @@ def _u(rng, lo, hi):
 
 # ----------------------------------------------------------------------------- one person
 
+ACTIVITY_AMPLITUDE_SD = 0.3  # log-normal spread of one person's range of motion from one activity to the next
+
+
+def _for_activity(style: Style, rng) -> Style:
+    """The subject's style for one activity: people move through a larger range in some
+    activities than in others (a person's overall amplitude alone spread the peak joint
+    angles by only 2–9 % between people; issue 13). Templates cap what a joint can reach."""
+    amp = style.amplitude * np.exp(rng.normal(0.0, ACTIVITY_AMPLITUDE_SD))
+    return replace(style, amplitude=float(np.clip(amp, 0.55, 1.5)))
+
+
 def _sway(n, rate_hz, style, rng):
     t = np.arange(n) / rate_hz
     out = np.zeros((n, 24, 3))
@@ -239,10 +251,14 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
         if name not in ACTIVITIES:
             raise ValueError(f"unknown activity {name!r}; expected one of {ACTIVITIES}")
         label = ACTIVITIES.index(name)
+        # the push-up's hop and the walking gait's heel strike need the person's own amplitude
+        style = subject.style if name in ("push_up", "walking") else _for_activity(subject.style, rng)
         if name == "walking":
             tl = _walking(style, rng, seconds_per_activity, label, rig, walk_radius_m, head, walk_line)
         else:
-            tl = acts.BUILDERS[name](style, rng, seconds_per_activity, label)
+            limit = acts.VERTICAL_ACC_LIMIT_M_S2.get(name)
+            pacer = None if limit is None else Pacer(rig, limit)
+            tl = acts.BUILDERS[name](style, rng, seconds_per_activity, label, pace=pacer)
         euler, heading, contact, anchor, heel, lab = tl.sample(n_seg, rate_hz, BASE, head)
         head = head + sum(k.turn_rad for k in tl.keys)
         parts.append((euler, heading, contact, anchor, heel, lab))

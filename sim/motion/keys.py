@@ -67,10 +67,19 @@ class Key:
 
 @dataclass
 class Timeline:
+    """Keys in order. pace: optional ``sim.motion.pace.Pacer``; ``add`` then lengthens a key
+    that would move the centre of mass up or down faster than the pacer allows."""
+
     keys: list[Key] = field(default_factory=list)
+    pace: object = None
 
     def add(self, dur_s, pose, contact, anchor, heel=(0.0, 0.0), turn_rad=0.0, label=0) -> "Timeline":
-        self.keys.append(Key(float(dur_s), np.asarray(pose, float), np.asarray(contact, bool), int(anchor), tuple(heel), float(turn_rad), int(label)))
+        pose, contact = np.asarray(pose, float), np.asarray(contact, bool)
+        dur_s = float(dur_s)
+        if self.pace is not None:
+            prev = self.keys[-1].pose if self.keys else BASE
+            dur_s = max(dur_s, self.pace.min_duration_s(prev, pose, contact, int(anchor)))
+        self.keys.append(Key(dur_s, pose, contact, int(anchor), tuple(heel), float(turn_rad), int(label)))
         return self
 
     @property

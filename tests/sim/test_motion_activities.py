@@ -98,7 +98,7 @@ def test_expected_contacts(tracks):
     idx = {n: i for i, n in enumerate(CONTACT_PARTS)}
     tr, res = tracks["sitting"]
     sit = tr.contact[:, idx["buttocks"]]
-    assert sit.sum() > 20 and res["joints"][sit, 0, 2].max() < 0.2  # pelvis low
+    assert sit.sum() > 14 and res["joints"][sit, 0, 2].max() < 0.2  # pelvis low, a second or more (8 s: a paced sit-down and up take ~6)
     assert (tr.contact[sit][:, [idx["left_foot"], idx["right_foot"]]]).all()
     tr, res = tracks["sit_up"]
     lying = tr.contact[:, idx["back"]]
