@@ -38,7 +38,7 @@ GRID = {
 def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per track: ((L,72) predicted pose_aa, (L,H,W) float32 inputs in kPa as the model saw them,
     (L,A) predicted activity probabilities)."""
-    from export.bundle import bundle_callables
+    from export.evaluate import bundle_callables
     from export.data import corrupt
     from export.evaluate import predict
 
