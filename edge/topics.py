@@ -13,7 +13,7 @@ lists them; a test keeps the two in step)::
 
     t = DeviceTopics("cavatar", "carpet-01")
     t.status            # 'cavatar/carpet-01/status'
-    t.ha_discovery()    # [(topic, payload dict), ...]
+    discovery(t)        # [(topic, payload dict), ...]: edge.ha_discovery, which builds on these names
 """
 
 from __future__ import annotations
@@ -156,11 +156,6 @@ class DeviceTopics:
     def ha_config_topic(self, component: str, object_id: str) -> str:
         return f"{self.ha_prefix}/{component}/{self.device}_{object_id}/config"
 
-    def ha_discovery(self, sw_version: str = "", activities: Sequence[str] | None = None) -> list[tuple[str, dict]]:
-        """Home Assistant discovery configs (topic, payload): see :mod:`edge.ha_discovery`."""
-        from edge.ha_discovery import discovery
-
-        return discovery(self, sw_version, activities)
 
 
 def presence_payload(device: str, count: int, activities: Sequence[str], time_s: float) -> dict:

@@ -216,27 +216,12 @@ def load_net(folder: str | Path):
 
 def bundle_metrics(folder: str | Path, tracks, pitch_m: float, body, frame_stride: int = 2) -> dict:
     """MPJPE / translation / activity of a bundle loaded as the board loads it (x86 kernels here)."""
-    from export.evaluate import track_metrics
+    from export.evaluate import bundle_callables, track_metrics
 
     encode, head, window = bundle_callables(folder)
     m = track_metrics(tracks, encode, head, window, pitch_m, body, frame_stride=frame_stride)
     m["subjects"] = sorted({int(t.subject) for t in tracks})
     return m
-
-
-def bundle_callables(folder: str | Path):
-    """(encode, head, window) of a bundle loaded as the board loads it; head returns the raw graph outputs."""
-    from edge.infer import ModelBundle
-    from export.model.heads import OUTPUTS
-
-    b = ModelBundle.load(folder)
-    names = [o.name for o in b._head.get_outputs()]
-
-    def head(w):
-        out = dict(zip(names, b._head.run(None, {b._head_name: np.ascontiguousarray(w, np.float32)})))
-        return {k: out[k] for k in OUTPUTS}
-
-    return b.encode, head, b.window
 
 
 def mean_pose_baseline_cm(train_tracks, test_tracks) -> float:

@@ -6,10 +6,12 @@
 transl_rel_m, activity_logits, confidence (numpy). Inputs are each track's pressure through the
 training corruption with a fixed seed per track, so every variant sees the same frames.
 MPJPE is pelvis-aligned over the 24 joints, in cm; the translation error is of the pelvis.
+:func:`bundle_callables` gives the (encode, head, window) of a bundle loaded as the board loads it.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -122,3 +124,18 @@ def torch_callables(net, frame_head=None) -> tuple[Encode, Head]:
             return {k: v.numpy() for k, v in zip(OUTPUTS, outs)}
 
     return encode, head
+
+
+def bundle_callables(folder: str | Path):
+    """(encode, head, window) of a bundle loaded as the board loads it; head returns the raw graph outputs."""
+    from edge.infer import ModelBundle
+    from export.model.heads import OUTPUTS
+
+    b = ModelBundle.load(folder)
+    names = [o.name for o in b._head.get_outputs()]
+
+    def head(w):
+        out = dict(zip(names, b._head.run(None, {b._head_name: np.ascontiguousarray(w, np.float32)})))
+        return {k: out[k] for k in OUTPUTS}
+
+    return b.encode, head, b.window

@@ -51,10 +51,10 @@ def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: i
                 board: bool = False) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per track: ((L,72) predicted pose_aa, (L,H,W) float32 inputs in kPa as the model saw them,
     (L,A) predicted activity probabilities). ``board``: the tracks hold the board's kPa, which the
-    runtime only floors and clips (edge.runtime.model_input); otherwise the training corruption."""
+    runtime only floors and clips (edge.infer.model_input); otherwise the training corruption."""
     from edge.infer import verify
-    from edge.runtime.model_input import input_limits, person_pressure_kpa
-    from export.bundle import bundle_callables
+    from edge.infer.model_input import input_limits, person_pressure_kpa
+    from export.evaluate import bundle_callables
     from export.data import corrupt
     from export.evaluate import predict
 

@@ -202,7 +202,7 @@ def evaluate_bundle(bundle: str | Path, tracks: list[Track], pitch_m: float, fra
     board does unless ``resolve_heading`` is False) beside the baseline: summarise()."""
     from edge.infer import heading as heading_cue
     from edge.infer import verify
-    from export.bundle import bundle_callables
+    from export.evaluate import bundle_callables
 
     encode, head, window = bundle_callables(bundle)
     heading = heading_cue.load(heading_params, verify(bundle)["activities"]) if resolve_heading else None

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from edge.body.model import SMPL_JOINT_NAMES
+from edge.body.rotations import euler_xyz_deg_to_axis_angle
 
 _UPRIGHT = (90.0, 0.0, 0.0)  # canonical Y-up → carpet Z-up, facing −y
 
@@ -65,46 +66,13 @@ POSES: dict[str, tuple[tuple[float, float, float], dict[str, tuple[float, float,
 }
 
 
-def _euler_xyz_to_axis_angle(deg) -> np.ndarray:
-    """Intrinsic x-then-y-then-z rotation (degrees) as axis-angle (R = Rx·Ry·Rz)."""
-    from edge.body.rotations import axis_angle_to_matrix
-
-    x, y, z = np.radians(deg)
-    r = axis_angle_to_matrix(np.array([x, 0, 0])) @ axis_angle_to_matrix(np.array([0, y, 0])) @ axis_angle_to_matrix(np.array([0, 0, z]))
-    return matrix_to_axis_angle(r)
-
-
-def matrix_to_axis_angle(r: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3,3) → axis-angle (3,), angle in [0, π]; accurate to round-off at every angle.
-
-    The angle is atan2(sin θ, cos θ) (an arccos of the trace loses half the digits near 0 and
-    π). The axis comes from the antisymmetric part while cos θ ≥ 0, and from the symmetric part
-    (1 − cos θ)·a·aᵀ beyond, where sin θ → 0: the raw rows of R + I used before carried the
-    sin θ·[a]× term and were off by up to 4e-5 rad just below π.
-    """
-    from edge.body.rotations import sinc
-
-    r = np.asarray(r, dtype=np.float64)
-    vee = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])  # 2 sin θ · a
-    cos = (np.trace(r) - 1.0) / 2.0
-    angle = float(np.arctan2(0.5 * np.linalg.norm(vee), cos))
-    if cos >= 0.0:
-        return 0.5 * vee / sinc(angle)
-    sym = 0.5 * (r + r.T) - cos * np.eye(3)  # (1 − cos θ) · a aᵀ
-    row = sym[int(np.argmax(np.diag(sym)))]
-    axis = row / np.linalg.norm(row)
-    if np.dot(axis, vee) < 0:
-        axis = -axis
-    return axis * angle
-
-
 def pose_aa(name: str) -> np.ndarray:
     """The named pose as (72,) axis-angle in radians, global orientation included."""
     if name not in POSES:
         raise ValueError(f"unknown pose {name!r}; known: {', '.join(POSES)}")
     orient, joints = POSES[name]
     out = np.zeros((len(SMPL_JOINT_NAMES), 3))
-    out[0] = _euler_xyz_to_axis_angle(orient)
+    out[0] = euler_xyz_deg_to_axis_angle(orient)
     for joint, deg in joints.items():
-        out[SMPL_JOINT_NAMES.index(joint)] = _euler_xyz_to_axis_angle(deg)
+        out[SMPL_JOINT_NAMES.index(joint)] = euler_xyz_deg_to_axis_angle(deg)
     return out.reshape(-1)

@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import os
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,19 +119,14 @@ def _virtual_calibration(plugin: Any, url: str, out_dir: Path, say: Callable[[st
 def run_sim_session(sensor: Any, seed: int, out_path: Path, mass_kg: float = 72.0) -> Calibration:
     """The scripted calibration session on a virtual carpet's ``sensor`` (its plug-in's ``calibration_sensor``),
     the actor drawn from ``seed``; saves ``out_path``."""
-    from calibration.actor import Actor
-    from calibration.providers import SimProvider
-    from calibration.session import Options, Session, SessionError
+    from calibration.session import SessionError
+    from calibration.virtual import calibrate_virtual
 
-    provider = SimProvider(Actor(sensor, mass_kg=mass_kg, seed=seed), None, out=lambda text: None, live_map=False)
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="cavatar-simcal-") as work:
-        session = Session(Path(work), Options(mass_kg=mass_kg))
-        try:
-            session.run(provider)
-            cal, val = session.finish(None)
-        except (SessionError, CalibrationError, ValueError) as exc:
-            raise SetupError(f"the automatic calibration of the virtual carpet failed: {exc}") from None
+    try:
+        cal, val = calibrate_virtual(sensor, seed=seed, mass_kg=mass_kg)
+    except (SessionError, CalibrationError, ValueError) as exc:
+        raise SetupError(f"the automatic calibration of the virtual carpet failed: {exc}") from None
     if not val.ok:
         raise SetupError(f"the automatic calibration of the virtual carpet did not validate: {val.summary()}")
     cal.save(out_path)

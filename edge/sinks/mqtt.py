@@ -566,9 +566,10 @@ class MqttSink(Sink):
         self._wake.set()
 
     def _send_discovery(self) -> None:
+        from edge.ha_discovery import discovery
         from edge.runtime.events import ha_event_discovery
 
-        configs = self.topics.ha_discovery(sw_version=__version__, activities=self._activities)
+        configs = discovery(self.topics, sw_version=__version__, activities=self._activities)
         configs += ha_event_discovery(self.topics, configs[0][1]["device"], configs[0][1].get("origin"))
         for topic, payload in configs:
             self._send(topic, dumps(payload), 1, True, "discovery")

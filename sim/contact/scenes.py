@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from edge.body.poses import POSES, _euler_xyz_to_axis_angle, pose_aa
+from edge.body.poses import POSES, pose_aa
+from edge.body.rotations import euler_xyz_deg_to_axis_angle
 
 VARIANTS = ("push_up_flat_hands",)
 SCENE_POSES = tuple(POSES) + VARIANTS
@@ -51,9 +52,9 @@ def scene_pose(model, name: str) -> np.ndarray:
 
         def make(theta):
             p = pose_aa("push_up_plank").reshape(-1, 3).copy()
-            p[0] = _euler_xyz_to_axis_angle((theta, 0.0, 0.0))
-            p[_joint(model, "left_wrist")] = _euler_xyz_to_axis_angle((0.0, 0.0, 90.0))
-            p[_joint(model, "right_wrist")] = _euler_xyz_to_axis_angle((0.0, 0.0, -90.0))
+            p[0] = euler_xyz_deg_to_axis_angle((theta, 0.0, 0.0))
+            p[_joint(model, "left_wrist")] = euler_xyz_deg_to_axis_angle((0.0, 0.0, 90.0))
+            p[_joint(model, "right_wrist")] = euler_xyz_deg_to_axis_angle((0.0, 0.0, -90.0))
             return p.reshape(-1)
 
         def gap(theta):
@@ -67,8 +68,7 @@ def scene_pose(model, name: str) -> np.ndarray:
 def grounded_vertices(model, pose, betas=None, xy_m=(0.9, 0.9), yaw_deg: float = 0.0, sink_m: float = 0.0):
     """Vertices (V,3) float64 of ``pose`` turned by yaw about the vertical, moved so the
     pelvis is over xy_m and the lowest vertex at z = −sink_m."""
-    from edge.body.rotations import axis_angle_to_matrix
-    from edge.body.poses import matrix_to_axis_angle
+    from edge.body.rotations import axis_angle_to_matrix, matrix_to_axis_angle
 
     p = np.asarray(pose, dtype=np.float64).reshape(-1).copy()
     if yaw_deg:

@@ -12,16 +12,29 @@ can read what a board reads: raw counts → ``calibration.apply`` → kPa.
   procedure, for telling the procedure's errors apart from the sensor's.
 
 The file's creation time is fixed (``CREATED``) so that the same seed writes the same bytes.
+The procedures are calibration's (``calibration.virtual.calibrate_virtual``); sim may not import
+calibration (design.md), so it finds that function through its entry point
+``cavatar.calibrations: virtual`` (setup.cfg).
 """
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
+from importlib import metadata
 
 METHODS = ("installer", "truth")
 CREATED = "2026-01-01T00:00:00+00:00"
 INSTALLER_MASS_KG = 72.0
+ENTRY_POINT = ("cavatar.calibrations", "virtual")
+
+
+def calibrator():
+    """``calibrate_virtual(sensor, *, seed, method, mass_kg, device_id)`` of the installed calibration package."""
+    group, name = ENTRY_POINT
+    found = [ep for ep in metadata.entry_points(group=group) if ep.name == name]
+    if not found:
+        raise RuntimeError(f"writing a dataset's calibrations needs calibration's entry point {group}: {name}, which "
+                           "is not installed; reinstall cavatar-edge (pip install -e .)")
+    return found[0].load()
 
 
 def carpet_calibration(carpet_seed: int, *, grid: int, adc_bits: int, pitch_mm: float, method: str):
@@ -31,18 +44,7 @@ def carpet_calibration(carpet_seed: int, *, grid: int, adc_bits: int, pitch_mm: 
     if method not in METHODS:
         raise ValueError(f"calibration must be one of {METHODS}, got {method!r}")
     sensor = CarpetSensor.random(carpet_seed, grid=grid, adc_bits=adc_bits, pitch_mm=pitch_mm)
-    if method == "truth":
-        from calibration.from_truth import calibration_from_truth
-
-        cal = calibration_from_truth(sensor, device_id=f"sim-{carpet_seed}")
-    else:
-        from calibration.actor import Actor
-        from calibration.providers import SimProvider
-        from calibration.session import Options, Session
-
-        with tempfile.TemporaryDirectory(prefix="cavatar-cal-") as work:
-            session = Session(Path(work), Options(mass_kg=INSTALLER_MASS_KG))
-            session.run(SimProvider(Actor(sensor, mass_kg=INSTALLER_MASS_KG, seed=carpet_seed), out=lambda _: None))
-            cal, _ = session.finish()
+    cal, _ = calibrator()(sensor, seed=carpet_seed, method=method, mass_kg=INSTALLER_MASS_KG,
+                          device_id=f"sim-{carpet_seed}")
     cal.created = CREATED
     return cal

@@ -14,6 +14,9 @@ from scipy.spatial.transform import Rotation
 
 from edge.body import SMPL_PARENTS, BodyModel
 from edge.body import lbs
+from edge.body.rotations import euler_xyz_deg_to_matrix as euler_deg_to_matrix  # noqa: F401  (sim.motion uses these names)
+from edge.body.rotations import matrix_to_axis_angle as matrix_to_rotvec  # noqa: F401
+from edge.body.rotations import skew
 from sim.motion.balance import foot_geometry, support_point, zmp_com
 
 J = {name: i for i, name in enumerate((
@@ -49,24 +52,6 @@ UPRIGHT = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # +90° about x: c
 
 # ----------------------------------------------------------------------------- rotations
 
-def euler_deg_to_matrix(e: np.ndarray) -> np.ndarray:
-    """Intrinsic x-then-y-then-z angles in degrees (..., 3) → R = Rx·Ry·Rz (..., 3, 3)."""
-    e = np.radians(np.asarray(e, dtype=np.float64))
-    cx, cy, cz = np.cos(e[..., 0]), np.cos(e[..., 1]), np.cos(e[..., 2])
-    sx, sy, sz = np.sin(e[..., 0]), np.sin(e[..., 1]), np.sin(e[..., 2])
-    r = np.empty(e.shape[:-1] + (3, 3))
-    r[..., 0, 0] = cy * cz
-    r[..., 0, 1] = -cy * sz
-    r[..., 0, 2] = sy
-    r[..., 1, 0] = sx * sy * cz + cx * sz
-    r[..., 1, 1] = -sx * sy * sz + cx * cz
-    r[..., 1, 2] = -sx * cy
-    r[..., 2, 0] = -cx * sy * cz + sx * sz
-    r[..., 2, 1] = cx * sy * sz + sx * cz
-    r[..., 2, 2] = cx * cy
-    return r
-
-
 def rot_z(angle_rad: np.ndarray) -> np.ndarray:
     a = np.asarray(angle_rad, dtype=np.float64)
     c, s = np.cos(a), np.sin(a)
@@ -83,33 +68,19 @@ def rot_x(angle_rad: np.ndarray) -> np.ndarray:
     return r
 
 
-def matrix_to_rotvec(r: np.ndarray) -> np.ndarray:
-    shape = r.shape[:-2]
-    return Rotation.from_matrix(r.reshape(-1, 3, 3)).as_rotvec().reshape(shape + (3,))
-
-
-def _skew(v):
-    z = np.zeros(v.shape[:-1])
-    return np.stack([
-        np.stack([z, -v[..., 2], v[..., 1]], -1),
-        np.stack([v[..., 2], z, -v[..., 0]], -1),
-        np.stack([-v[..., 1], v[..., 0], z], -1),
-    ], -2)
-
-
 def min_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The smallest rotation taking direction a to direction b, (N,3) → (N,3,3)."""
     a = a / np.linalg.norm(a, axis=-1, keepdims=True)
     b = b / np.linalg.norm(b, axis=-1, keepdims=True)
     v = np.cross(a, b)
     c = np.sum(a * b, -1)
-    k = _skew(v)
+    k = skew(v)
     return np.eye(3) + k + (k @ k) / np.maximum(1.0 + c, 1e-9)[..., None, None]
 
 
 def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rotation about one fixed unit axis (3,) by angles (N,) → (N,3,3)."""
-    k = _skew(np.broadcast_to(axis, angle.shape + (3,)))
+    k = skew(np.broadcast_to(axis, angle.shape + (3,)))
     s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
     return np.eye(3) + s * k + (1 - c) * (k @ k)
 

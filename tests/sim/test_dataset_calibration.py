@@ -63,3 +63,25 @@ def test_unknown_calibration_method_is_refused(tmp_path):
         generate(tmp_path / "d", subjects=1, seconds_per_activity=1.0, activities=("squat",), progress=False,
                  calibration="guess")
     assert not (tmp_path / "d" / "manifest.json").exists()
+
+
+def test_sim_finds_calibration_through_its_entry_point_and_says_when_it_is_missing(monkeypatch):
+    """sim may not import calibration (design.md): the procedure comes from the entry point cavatar.calibrations."""
+    from calibration.virtual import calibrate_virtual
+    from sim.dataset import calibrate
+
+    assert calibrate.calibrator() is calibrate_virtual
+    monkeypatch.setattr(calibrate, "ENTRY_POINT", ("cavatar.calibrations", "no-such-procedure"))
+    with pytest.raises(RuntimeError, match="cavatar.calibrations: no-such-procedure.*reinstall cavatar-edge"):
+        calibrate.carpet_calibration(3, grid=32, adc_bits=12, pitch_mm=19.05, method="truth")
+
+
+def test_calibrate_virtual_names_the_board_and_refuses_an_unknown_method():
+    from calibration.virtual import calibrate_virtual
+    from sim.sensor import CarpetSensor
+
+    sensor = CarpetSensor.random(3, grid=32, adc_bits=12)
+    cal, validation = calibrate_virtual(sensor, seed=3, method="truth", device_id="sim-3")
+    assert validation is None and cal.device["device_id"] == "sim-3" and cal.baseline_counts.shape == (32, 32)
+    with pytest.raises(ValueError, match=r"one of \('installer', 'truth'\)"):
+        calibrate_virtual(sensor, seed=3, method="guess")

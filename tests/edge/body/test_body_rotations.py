@@ -80,3 +80,52 @@ def test_sinc_series_matches_direct_at_the_switch():
     x = np.array([1e-4 * (1 - 1e-12), 1e-4 * (1 + 1e-12)])
     assert abs(sinc(x)[0] - sinc(x)[1]) < 1e-15
     assert sinc(np.array(0.0)) == 1.0
+
+
+# ----------------------------------------------------------------------------- matrix → axis-angle, Euler (issue 15:
+# the one conversion of the code base, used by edge.infer, edge.body.poses, sim and export)
+
+def test_matrix_to_axis_angle_inverts_rodrigues_over_a_batch_at_every_angle():
+    """A batch of every hard angle at once (0, tiny, ½π, the cos θ = 0 branch point, near π, π) gives each back."""
+    from edge.body.rotations import matrix_to_axis_angle
+
+    rng = np.random.default_rng(15)
+    axes = rng.normal(size=(9, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    angles = np.array([0.0, 1e-12, 1e-5, 0.5, np.pi / 2 - 1e-9, np.pi / 2 + 1e-9, 2.5, np.pi - 1e-7, np.pi - 1e-3])
+    rotvecs = axes * angles[:, None]
+    aa = matrix_to_axis_angle(axis_angle_to_matrix(rotvecs).reshape(3, 3, 3, 3))  # leading axes kept
+    assert aa.shape == (3, 3, 3)
+    np.testing.assert_allclose(aa.reshape(9, 3), rotvecs, atol=1e-12, rtol=0)
+
+
+def test_matrix_to_axis_angle_agrees_with_scipy_and_keeps_angles_in_0_pi():
+    from edge.body.rotations import matrix_to_axis_angle
+
+    r = Rotation.random(500, random_state=3)
+    aa = matrix_to_axis_angle(r.as_matrix())
+    assert np.linalg.norm(aa, axis=-1).max() <= np.pi + 1e-12
+    np.testing.assert_allclose(axis_angle_to_matrix(aa), r.as_matrix(), atol=1e-13)
+    np.testing.assert_allclose(aa, r.as_rotvec(), atol=1e-10)
+
+
+def test_exactly_pi_gives_the_axis_up_to_its_sign():
+    from edge.body.rotations import matrix_to_axis_angle
+
+    aa = matrix_to_axis_angle(2 * np.outer(AXIS, AXIS) - np.eye(3))
+    assert min(np.abs(aa - np.pi * AXIS).max(), np.abs(aa + np.pi * AXIS).max()) < 1e-15
+
+
+def test_euler_xyz_is_rx_then_ry_then_rz_and_its_axis_angle_round_trips():
+    from edge.body.rotations import euler_xyz_deg_to_axis_angle, euler_xyz_deg_to_matrix
+
+    deg = np.array([[30.0, -45.0, 120.0], [90.0, 0.0, 0.0], [0.0, 0.0, 0.0], [179.0, 10.0, -170.0]])
+    x, y, z = (np.radians(deg[:, i]) for i in range(3))
+    unit = np.eye(3)
+    expected = (axis_angle_to_matrix(x[:, None] * unit[0]) @ axis_angle_to_matrix(y[:, None] * unit[1])
+                @ axis_angle_to_matrix(z[:, None] * unit[2]))
+    np.testing.assert_allclose(euler_xyz_deg_to_matrix(deg), expected, atol=1e-14)
+    np.testing.assert_allclose(euler_xyz_deg_to_matrix(deg), Rotation.from_euler("XYZ", deg, degrees=True).as_matrix(),
+                               atol=1e-14)  # scipy's intrinsic XYZ: the same convention
+    np.testing.assert_allclose(axis_angle_to_matrix(euler_xyz_deg_to_axis_angle(deg)), expected, atol=1e-13)
+    np.testing.assert_allclose(euler_xyz_deg_to_axis_angle(deg[1]), [np.pi / 2, 0, 0], atol=1e-15)  # upright

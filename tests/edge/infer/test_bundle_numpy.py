@@ -7,9 +7,9 @@ import sys
 
 import numpy as np
 
-from edge.body.rotations import axis_angle_to_matrix
+from edge.body.rotations import axis_angle_to_matrix, matrix_to_axis_angle
 from edge.infer.normalise import center_of_pressure_m, normalise_kpa
-from edge.infer.rotations import matrix_to_axis_angle, rot6d_to_axis_angle, rot6d_to_matrix
+from edge.infer.rotations import rot6d_to_axis_angle, rot6d_to_matrix
 
 
 def test_axis_angle_round_trip_including_zero_and_pi():

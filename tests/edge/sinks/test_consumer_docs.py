@@ -8,6 +8,7 @@ from pathlib import Path
 from edge.body import SMPL_JOINT_NAMES, SMPL_PARENTS
 from edge.runtime.config import default_bundle_path
 from edge.record import PERSON_KEYS
+from edge.ha_discovery import discovery
 from edge.topics import DeviceTopics
 
 DOCS = Path(__file__).resolve().parents[3] / "docs"
@@ -30,7 +31,7 @@ def test_the_record_page_lists_fields_joints_in_order_and_activities():
 
 def test_the_home_assistant_page_names_every_entity_and_label():
     activities = json.loads((default_bundle_path() / "manifest.json").read_text())["activities"]
-    for _, payload in DeviceTopics("cavatar", "carpet-01").ha_discovery(activities=activities):
+    for _, payload in discovery(DeviceTopics("cavatar", "carpet-01"), activities=activities):
         assert f"`{payload['default_entity_id']}`" in HA, payload["default_entity_id"]
     for label in activities:
         assert f"`{label}`" in HA, label
@@ -41,5 +42,5 @@ def test_the_home_assistant_page_names_every_entity_and_label():
 def test_the_discovery_example_in_the_mqtt_page_is_what_is_sent():
     text = (DOCS / "mqtt.md").read_text()
     example = json.loads(text.split("Home Assistant discovery (one of eight")[1].split("```json")[1].split("```")[0])
-    sent = dict(DeviceTopics("cavatar", "carpet-01").ha_discovery(sw_version="0.1.0"))
+    sent = dict(discovery(DeviceTopics("cavatar", "carpet-01"), sw_version="0.1.0"))
     assert example == sent["homeassistant/binary_sensor/carpet-01_presence/config"]

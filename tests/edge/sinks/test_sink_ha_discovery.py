@@ -11,6 +11,7 @@ import jsonschema
 import pytest
 
 from edge.ha_discovery import RUNTIME_STATES, entity_slug
+from edge.ha_discovery import discovery
 from edge.topics import DeviceTopics, presence_payload
 
 SCHEMA = json.loads((Path(__file__).parent / "ha_discovery.schema.json").read_text())
@@ -31,7 +32,7 @@ def render(template, payload):
 @pytest.mark.parametrize("device", ["carpet-01", "Floor.2_west"])
 def test_every_payload_validates_against_the_documented_schema(device, activities):
     t = DeviceTopics("site/floor2", device)
-    configs = t.ha_discovery(sw_version="1.2.3", activities=activities)
+    configs = discovery(t, sw_version="1.2.3", activities=activities)
     for topic, payload in configs:
         component = topic.split("/")[1]
         errors = sorted(validator(component).iter_errors(payload), key=str)
@@ -43,7 +44,7 @@ def test_every_payload_validates_against_the_documented_schema(device, activitie
 
 def test_the_schema_refuses_what_home_assistant_refuses():
     t = DeviceTopics("cavatar", "c1")
-    good = dict(t.ha_discovery(activities=ACTIVITIES))
+    good = dict(discovery(t, activities=ACTIVITIES))
     sensor, binary = validator("sensor"), validator("binary_sensor")
     activity = good["homeassistant/sensor/c1_activity/config"]
     assert not list(sensor.iter_errors(activity))
@@ -62,7 +63,7 @@ def test_the_schema_refuses_what_home_assistant_refuses():
 
 def test_templates_give_states_home_assistant_accepts():
     t = DeviceTopics("cavatar", "c1")
-    configs = {topic.split("/")[2].split("_", 1)[1]: p for topic, p in t.ha_discovery(activities=ACTIVITIES)}
+    configs = {topic.split("/")[2].split("_", 1)[1]: p for topic, p in discovery(t, activities=ACTIVITIES)}
     present = presence_payload("c1", 2, ["squat", "walking", "squat"], 10.0)
     empty = presence_payload("c1", 0, [], 11.0)
     assert render(configs["presence"]["value_template"], present) == "ON"
@@ -91,5 +92,5 @@ def test_an_entity_added_elsewhere_gets_the_same_conventions():
         sw_version="1.2.3")
     assert topic == "homeassistant/binary_sensor/c1_person_down/config"
     assert not list(validator("binary_sensor").iter_errors(payload))
-    assert payload["device"] == dict(t.ha_discovery(sw_version="1.2.3"))[
+    assert payload["device"] == dict(discovery(t, sw_version="1.2.3"))[
         "homeassistant/binary_sensor/c1_presence/config"]["device"]  # one device in Home Assistant

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from edge.sinks import open_sink
+from edge.ha_discovery import discovery
 from edge.topics import DeviceTopics
 
 from sink_helpers import DEVICE, body_record, wait_until
@@ -104,7 +105,7 @@ def test_last_will_says_offline_when_the_publisher_is_killed(broker, subscribe):
 def test_home_assistant_discovery_payloads(broker, subscribe):
     ha = subscribe(broker.port, ["homeassistant/#"])
     sink = open_sink(broker.url("qos=0&ha=1"), device=DEVICE)
-    expected = {topic for topic, _ in T.ha_discovery()}
+    expected = {topic for topic, _ in discovery(T)}
     try:
         assert sink.wait_connected(10)
         assert len(expected) == 8

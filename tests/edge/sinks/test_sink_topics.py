@@ -7,6 +7,7 @@ import pytest
 
 from edge import topics
 from edge.sinks import jsonl, mqtt
+from edge.ha_discovery import discovery
 from edge.topics import DeviceTopics
 
 REPO = Path(__file__).resolve().parents[3]
@@ -19,7 +20,7 @@ def test_device_topics():
         "site/floor2/carpet-01/status", "site/floor2/carpet-01/info",
         "site/floor2/carpet-01/bodies", "site/floor2/carpet-01/presence")
     assert t.all == "site/floor2/carpet-01/#"
-    assert [topic for topic, _ in t.ha_discovery()] == [
+    assert [topic for topic, _ in discovery(t)] == [
         "homeassistant/binary_sensor/carpet-01_presence/config",
         "homeassistant/sensor/carpet-01_people/config",
         "homeassistant/sensor/carpet-01_activity/config",
