@@ -88,10 +88,11 @@ class PeopleInference:
             if not self.adaptive:
                 self._infer_idle(handover.filled_kpa, step)
             return step
-        states, run = [], []
+        states, run, opened = [], [], []
         for person in handover.people:
             st, new = self.tracks.get(person.track_id)
-            step.work["tracks_started"] += new
+            if new:
+                opened.append(person.track_id)
             states.append(st)
             if self.adaptive and person.still and st.result is not None:
                 st.window.push(st.result.features)  # unchanged input: the same features, no encoder
@@ -99,8 +100,13 @@ class PeopleInference:
             else:
                 run.append((person, st))
         step.work["person_frames"] = len(handover.people)
+        step.work["tracks_started"] = len(opened)
         if run:
-            self._infer(handover.filled_kpa, run, step)
+            try:
+                self._infer(handover.filled_kpa, run, step)
+            except Exception:
+                self.tracks.keep_only(set(self.tracks.tracks) - set(opened))  # no half-opened window: reopened next frame
+                raise
         for st in states:
             st.frames += 1
         step.results = [st.result for st in states]

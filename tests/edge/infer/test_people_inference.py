@@ -89,3 +89,33 @@ def test_always_infer_runs_the_whole_carpet_when_nobody_is_confirmed(calls):
     step = PeopleInference(bundle, adaptive=False).step(handover([], held=set(), frame=A))
     assert seen == [("encoder", 1), ("head", 1)] and step.results == [] and step.work["idle_runs"] == 1
     assert PeopleInference(bundle).step(handover([], held=set(), frame=A)).work["encoder_runs"] == 0
+
+
+def test_inference_never_imports_the_runtime_and_reads_the_scene_only_through_its_handover():
+    import ast
+    from pathlib import Path
+
+    import edge.infer
+
+    for path in Path(edge.infer.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        guarded = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.dump(node.test)
+                   for n in ast.walk(node)}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                assert not node.module.startswith("edge.runtime"), f"{path.name} imports {node.module}"
+                if node.module.startswith("edge.scene"):
+                    assert id(node) in guarded, f"{path.name} imports {node.module} at run time (types only)"
+
+
+def test_a_frame_whose_model_call_fails_leaves_no_half_opened_window(calls):
+    bundle, seen = calls
+    inf = PeopleInference(bundle)
+    real = bundle.encode
+    bundle.encode = lambda x: (_ for _ in ()).throw(RuntimeError("onnxruntime failed"))
+    with pytest.raises(RuntimeError):
+        inf.step(handover([person(1, A > 0)]))
+    assert inf.tracks_open == 0  # so the next frame opens it again, and counts it
+    bundle.encode = real
+    step = inf.step(handover([person(1, A > 0)]))
+    assert step.work["tracks_started"] == 1 and inf.tracks_open == 1 and step.results[0] is not None

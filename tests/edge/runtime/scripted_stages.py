@@ -25,7 +25,8 @@ def person(track_id, mask, still):
 
 class ScriptedScene:
     """Stands in for SceneTracker: per frame the scripted (people, held track ids[, empty]); empty
-    defaults to "nobody confirmed". The frame it hands over is the calibrated one (nothing masked)."""
+    defaults to "nobody confirmed". The frame it hands over is the calibrated one (nothing masked).
+    It has nothing but ``update()``: FrameStages may use nothing else of the scene."""
 
     def __init__(self, script):
         self.script = list(script)
