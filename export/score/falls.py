@@ -221,6 +221,7 @@ def main(argv=None) -> int:
     ap.add_argument("--tuned-on", help="the clip file the thresholds were tuned on (recorded, and scored too)")
     ap.add_argument("--out", default="out/falls/score", help="PREFIX for PREFIX.json, .md, .png")
     ap.add_argument("--timeline", help="the clip drawn in the PNG (default: the first fall)")
+    ap.add_argument("--plots", metavar="DIR", help="also draw every missed fall and every false alarm's clip, one PNG each")
     a = ap.parse_args(argv)
     config = FallConfig()
     clips = load_clips(a.clips)
@@ -251,6 +252,12 @@ def main(argv=None) -> int:
     pick = next((c for c in clips if (a.timeline and c["name"] == a.timeline) or (not a.timeline and c["kind"] == "fall")), clips[0])
     events, _ = run_clip(pick, config)
     timeline_png(pick, events, pick["truth"], prefix.with_suffix(".png"))
+    if a.plots:
+        for c in clips:
+            judged = next(p for p in s["clips"] if p["name"] == c["name"])
+            if judged["false_alarms"] or (c["kind"] == "fall" and not judged["detected"]):
+                events, _ = run_clip(c, config)
+                timeline_png(c, events, c["truth"], Path(a.plots) / f"{c['name']}.png")
     print(markdown(result))
     return 0
 
