@@ -22,7 +22,12 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
 4. contacts no track reaches are new: clustered so that all of a cluster's contacts lie within
    ``group_radius_m`` of each other (two people side by side are not chained into one), each
    cluster is a group with key 0, which the tracker matches to coasting tracks (Hungarian on
-   distance, ``linear_sum_assignment``) or starts as a new track.
+   distance, ``linear_sum_assignment``) or starts as a new track;
+5. everyone moved at once (two or more tracks, the contacts that stayed carry less than
+   MOVED_KEEP_FRACTION of the previous frame's force, new ones carry most of it: ``sim://``
+   starting a new scene): no contact keeps its prior and no track reaches; every contact is
+   regrouped as new (4.). Otherwise the fading contacts left behind anchor the old tracks, which
+   then reach out to the new contacts of other people and carry two people or half of one.
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ class Body:
     weight_n: float | None = None
     far_frames: int = 0
     heavy_frames: int = 0
+    last_force_n: float | None = None  # what its contacts carried in the previous frame (None: not seen then)
 
 
 # Someone stepping in adds at least this fraction of the body's own weight: a person's force on the
@@ -55,6 +61,8 @@ KEEP_FRACTION = 0.8
 # while the other carries the body; contacts fading out while others appear (someone jumping away,
 # the simulator moving everyone at once) carry no weight and must not pull the new ones in.
 ANCHOR_FRACTION = 0.3
+# Everyone moved at once when the contacts that stayed carry less than this fraction of the previous frame's.
+MOVED_KEEP_FRACTION = 0.5
 
 
 def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -> np.ndarray:
@@ -140,6 +148,8 @@ def group_blobs(
     if n == 0:
         return Grouping([], frozenset(), frozenset())
     owner = np.zeros(n, dtype=np.int64)
+    if moved_at_once(forces_n, priors, bodies):
+        priors = owner  # everyone's contacts are new: regrouped afresh, each group matched by the tracker
     for i in range(n):
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
@@ -177,6 +187,20 @@ def group_blobs(
         cluster = _new_people(centres_m[new], forces_n[new], group_radius_m, 0.25 * min_person_force_n)
         groups += [(new[cluster == c], 0) for c in np.unique(cluster)]
     return Grouping(groups, frozenset(far), frozenset(heavy))
+
+
+def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Body]) -> bool:
+    """True when two or more tracks had contacts in the previous frame, the contacts that stayed with their
+    tracks carry less than MOVED_KEEP_FRACTION of what all of them carried then, and new contacts carry
+    most of the force: everyone moved at once (sim:// starting a new scene). Contacts left behind fading
+    out would otherwise keep their tracks anchored and let them reach the new contacts of other people.
+    A single body whose contacts all move (a push-up's hands and feet resettling) stays with its track."""
+    seen = [b.last_force_n for b in bodies.values() if b.last_force_n is not None]
+    if len(seen) < 2 or sum(seen) <= 0:  # one body's contacts moving at once are still that body's
+        return False
+    before = sum(seen)
+    kept = float(forces_n[np.isin(priors, list(bodies))].sum())
+    return kept < MOVED_KEEP_FRACTION * before and float(forces_n.sum()) - kept >= kept
 
 
 def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, faint_n: float) -> np.ndarray:

@@ -45,6 +45,7 @@ class Track:
     weight_n: float | None = None  # the body's own weight (contacts' force, slow average), once confirmed
     far_frames: int = 0  # consecutive frames with parts farther apart than split_distance_m
     heavy_frames: int = 0  # consecutive frames carrying more than its weight with a part that carries the excess
+    contact_force_n: float | None = None  # what its contacts carried in the last frame (None: not seen in it)
 
     def predict(self, t_s: float, horizon_s: float = 0.25) -> np.ndarray:
         """Constant-velocity prediction, extrapolated at most ``horizon_s`` (a coasting track's velocity goes stale)."""
@@ -74,8 +75,8 @@ class PeopleTracker:
     def bodies(self, t_s: float) -> dict[int, Body]:
         """Every track as grouping sees it: predicted centre, reach (reach_m beyond its extent), weight, split evidence."""
         cfg = self.config
-        return {k: Body(tr.predict(t_s), cfg.reach_m + tr.extent_m, tr.weight_n, tr.far_frames, tr.heavy_frames)
-                for k, tr in self.tracks.items()}
+        return {k: Body(tr.predict(t_s), cfg.reach_m + tr.extent_m, tr.weight_n, tr.far_frames, tr.heavy_frames,
+                        tr.contact_force_n) for k, tr in self.tracks.items()}
 
     def observe_body(self, tr: Track, extent_m: float, contact_force_n: float, far: bool, heavy: bool, dt_s: float) -> None:
         """After a frame: the track's extent (max of now and the decayed old one), its weight (slow average of
@@ -85,6 +86,7 @@ class PeopleTracker:
         tr.extent_m = max(float(extent_m), tr.extent_m * decay)
         tr.far_frames = tr.far_frames + 1 if far else 0
         tr.heavy_frames = tr.heavy_frames + 1 if heavy else max(0, tr.heavy_frames - 1)  # a step's dip does not reset it
+        tr.contact_force_n = float(contact_force_n)
         if tr.track_id is None or heavy:
             return
         if tr.weight_n is None:
@@ -121,6 +123,9 @@ class PeopleTracker:
                 if cost[r, c] <= gates[c]:
                     result[free_obs[r]] = free_tracks[c]
                     bound.add(free_tracks[c].key)
+        for k, tr in self.tracks.items():
+            if k not in bound:
+                tr.contact_force_n = None
         for i, o in enumerate(observations):
             tr = result[i]
             if tr is None:
