@@ -21,10 +21,13 @@ def bundle():
 
 
 def feet_toward_minus_y() -> np.ndarray:
-    """Two heel-heavy feet, toes at the lower rows: a person facing −y (yaw 0)."""
+    """Two feet, toes at the lower row numbers: a person facing −y (yaw 0). Each is heel-heavy (its CoP
+    behind its centroid) and shaped like a foot (a wide forefoot, a narrow heel), so both cues agree."""
     p = np.zeros((H, W), np.float32)
-    for c0 in (40, 50):
-        p[40:53, c0:c0 + 5] = np.linspace(6.0, 10.0, 13)[:, None]  # CoP 11 mm behind the centroid
+    ramp = np.linspace(6.0, 10.0, 14)[:, None]
+    for c0 in (38, 50):
+        p[40:48, c0:c0 + 7] = ramp[:8]          # forefoot
+        p[48:54, c0 + 2:c0 + 5] = ramp[8:]      # heel
     return p
 
 

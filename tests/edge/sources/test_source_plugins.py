@@ -28,7 +28,7 @@ def extra_plugins(monkeypatch):
 
 def test_sim_is_registered_as_an_entry_point_and_edge_imports_no_sim():
     assert plugins.registered()["sim"].target == "sim.source"
-    code = ("import sys, edge.sources, edge.runtime.pipeline, edge.cli; "
+    code = ("import sys, edge.sources, edge.runtime.loop, edge.cli; "
             "print(sorted(m for m in sys.modules if m == 'sim' or m.startswith('sim.')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"  # found by its entry point only when a sim:// URL is opened
