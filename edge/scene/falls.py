@@ -12,13 +12,17 @@ on the area and the geometry, which calibration hardly changes; loads only gate 
 of a person standing reads well below their weight where the feet saturate the sensels). A body is
 
 - *on its feet* when a small, short footprint carries at least feet_min_force_n;
-- *on the floor* when a large footprint carries at least person_min_force_n (lying, not sitting,
-  kneeling or a plank); it stays there down to floor_stay_min_area_m2.
+- *on the floor* when a large (or long) footprint carries at least person_min_force_n at an adult's
+  mean pressure (floor_min_kpa: not a pet; a long one at most floor_long_max_kpa: not a lunge or a
+  plank); it stays there while it still looks so or keeps floor_stay_min_area_m2.
 
-A floor *episode* starts where a body comes onto the floor; its *arrival* is the time since a body
-last stood on its feet within fall_radius_m of it, if that was at least min_shift_m away (the load moved by about
-a body's height: sitting down, or a bag dropped or a pet lying down beside a standing person, moves
-it less), carrying at least 1/max_load_ratio of the lying load. ``fall`` is raised once the episode
+A floor *episode* starts where a body comes onto the floor; its *arrival* is judged confirm_s later,
+from where the body then lies: the time since the last stance nearby (within fall_radius_m) ended, if
+that stance stood at least min_shift_m away (the load moved by about a body's height: sitting down, or
+a bag dropped or a pet lying down beside a standing person, moves it less) carrying at least
+1/max_load_ratio of the lying load — or if it was someone seated on a chair beside the carpet (a still,
+steady, light print for seated_s, at most 1/seated_load_ratio of the lying load: their weight arriving
+on the floor is a fall wherever it lands). ``fall`` is raised once the episode
 has lasted confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival
 time); ``person_down`` once it has lasted person_down_s when the arrival took at most down_window_s
 and the model did not call its tracks an exercise (push-ups, sit-ups) while the body moved. Both clear when the episode
