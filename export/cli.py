@@ -76,6 +76,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--no-resolve-heading", action="store_true",
                    help="score the model's own global orientation (default: resolved from the feet, as the runtime does)")
     e.add_argument("--heading-params", default="", help="heading parameters JSON (default: the packaged edge/infer/heading.json)")
+    e.add_argument("--input", default="clean", choices=("clean", "board"),
+                   help="clean (default): each person's true pressure through the training corruption; board: the "
+                   "dataset's raw counts through its carpets' calibrations (`cavatar sim generate --calibration "
+                   "installer`), floored and clipped as the runtime does — what a board feeds the model")
     e.add_argument("--stride", type=int, default=2, help="evaluate every Nth frame (default 2)")
     e.add_argument("--people", default="", help="only tracks from scenes with this many people, e.g. 2 or 2..3")
     e.add_argument("--out", required=True, help="output prefix: writes PREFIX.json and PREFIX.md")
@@ -210,7 +214,7 @@ def run_eval(args: argparse.Namespace) -> int:
             HeadingParams.load(heading_file)
         tracks, pitch = [], None
         for d in args.data:
-            t, p, _ = user_tracks(d, split)
+            t, p, _ = user_tracks(d, split, board=args.input == "board")
             if pitch is not None and p != pitch:
                 raise ValueError(f"{d}: pitch {p} m differs from the other datasets' {pitch} m")
             tracks, pitch = tracks + t, p
@@ -228,6 +232,7 @@ def run_eval(args: argparse.Namespace) -> int:
                              score_from=SEEN_TIME_TEST_FROM if args.protocol == "seen-time" else 0.0)
     result["setup"] = {"bundle": f"{manifest['name']}@{manifest['files']['encoder.onnx'][:12]}", "data": args.data,
                        "split": split, "protocol": PROTOCOLS[args.protocol], "people": args.people or "all",
+                       "input": args.input,
                        "heading": "model alone" if args.no_resolve_heading else f"resolved from the feet ({heading_file or 'edge/infer/heading.json'})",
                        "frame_stride": args.stride,
                        "tracks": len(tracks), "subjects": sorted({f"s{t.subject:02d}" for t in tracks}),

@@ -43,6 +43,7 @@ class Track:
     activity: np.ndarray       # (N,) int64
     subject: int
     people: int                # number of people in the scene
+    board: bool = False        # pressure_kpa is the board's path (load_tracks(board=True)), not the truth
 
     def __len__(self) -> int:
         return len(self.pose_aa)
@@ -107,7 +108,7 @@ def load_tracks(dataset, split: str, max_tracks: int | None = None, board: bool 
                     tracks.append(Track(own[start:stop, p].astype(np.float16), shard["pose_aa"][r, p], shard["betas"][r, p],
                                         shard["transl_m"][r, p], shard["joints_m"][r, p],
                                         shard["activity"][r, p].astype(np.int64), int(shard["subject"][r[0], p]),
-                                        int(present[start:stop].sum(1).max())))
+                                        int(present[start:stop].sum(1).max()), board))
                     if max_tracks and len(tracks) >= max_tracks:
                         return tracks
     return tracks

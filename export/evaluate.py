@@ -27,7 +27,14 @@ Head = Callable[[np.ndarray], dict]
 
 
 def track_pressure(track: Track, seed: int) -> np.ndarray:
-    """(L,H,W) float32 kPa: the track's pressure through the training corruption, deterministic for a seed."""
+    """(L,H,W) float32 kPa: the track's pressure through the training corruption, deterministic for a seed;
+    a board's-path track (``track.board``) only floored and clipped, as the runtime does (edge.infer.model_input)."""
+    if track.board:
+        from edge.infer.model_input import FLOOR_KPA, SATURATION_KPA
+
+        kpa = track.pressure_kpa.astype(np.float32)
+        kpa[kpa < FLOOR_KPA] = 0.0
+        return np.minimum(kpa, np.float32(SATURATION_KPA))
     return corrupt(track.pressure_kpa.astype(np.float32), np.random.default_rng(seed)).numpy()
 
 

@@ -99,6 +99,11 @@ def test_eval_cli_writes_json_and_markdown(bundle, tiny_data, tmp_path, capsys):
     assert seen["overall"]["frames"] == sum(len(t) - int(np.ceil(0.9 * len(t))) for t in train)
     assert "model_heading_over90_pct" not in seen["overall"] and seen["setup"]["heading"] == "model alone"
     assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--people", "3", "--out", str(tmp_path / "x")]) == 2
+    # the board's path needs the carpets' calibrations, and says how to make them
+    capsys.readouterr()
+    assert main(["eval", "--bundle", str(bundle), "--data", str(tiny_data), "--input", "board",
+                 "--out", str(tmp_path / "b")]) == 2
+    assert "--calibration installer" in capsys.readouterr().err and not (tmp_path / "b.json").exists()
 
 
 def test_finetune_splits_in_time_and_writes_a_new_bundle(bundle, tiny_data, tmp_path):

@@ -85,3 +85,15 @@ def test_calibrate_virtual_names_the_board_and_refuses_an_unknown_method():
     assert validation is None and cal.device["device_id"] == "sim-3" and cal.baseline_counts.shape == (32, 32)
     with pytest.raises(ValueError, match=r"one of \('installer', 'truth'\)"):
         calibrate_virtual(sensor, seed=3, method="guess")
+
+
+def test_board_tracks_reach_the_model_floored_and_clipped_as_the_runtime_feeds_it(calibrated):
+    from edge.infer.model_input import FLOOR_KPA, SATURATION_KPA
+    from export.evaluate import track_pressure
+
+    board = (load_tracks(calibrated, "test", board=True) + load_tracks(calibrated, "train", board=True))[0]
+    assert board.board and board.slice(0, 3).board and not load_tracks(calibrated, "train")[0].board
+    raw = board.pressure_kpa.astype(np.float32)
+    fed = track_pressure(board, seed=0)
+    np.testing.assert_array_equal(fed, np.minimum(np.where(raw < FLOOR_KPA, 0.0, raw), SATURATION_KPA))
+    np.testing.assert_array_equal(fed, track_pressure(board, seed=1))  # no random corruption on top of the sensor
