@@ -48,7 +48,9 @@ def accepted_forms() -> str:
 def _scheme_of(url: str) -> str:
     scheme, sep, _ = url.partition("://")
     if not sep or (scheme not in SCHEMES and scheme not in plugins.registered()):
-        raise ValueError(f"unknown source {url!r}. Accepted forms: {accepted_forms()}")
+        raise ValueError(f"unknown source {url!r}. Accepted forms: {accepted_forms()} (plug-in schemes such as sim:// "
+                         f"come from installed entry points, {plugins.GROUP}: reinstall with `pip install -e .` if one "
+                         "is missing)")
     return scheme
 
 
