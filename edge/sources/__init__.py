@@ -48,7 +48,9 @@ def accepted_forms() -> str:
 def _scheme_of(url: str) -> str:
     scheme, sep, _ = url.partition("://")
     if not sep or (scheme not in SCHEMES and scheme not in plugins.registered()):
-        raise ValueError(f"unknown source {url!r}. Accepted forms: {accepted_forms()}")
+        raise ValueError(f"unknown source {url!r}. Accepted forms: {accepted_forms()} (plug-in schemes such as sim:// "
+                         f"come from installed entry points, {plugins.GROUP}: reinstall with `pip install -e .` if one "
+                         "is missing)")
     return scheme
 
 
@@ -64,12 +66,19 @@ def source_plugin(url: str) -> plugins.Plugin | None:
         raise SourceError(f"{scheme}:// sources are unavailable here: {exc}") from None
 
 
+def _builtin(scheme: str) -> Any:
+    try:
+        return importlib.import_module(SCHEMES[scheme])
+    except ImportError as exc:
+        raise SourceError(f"{scheme}:// sources are unavailable here: {exc}") from None
+
+
 def source_options(url: str) -> dict[str, Any]:
     """``url``'s typed options, checked against its scheme (ValueError that quotes the form)."""
     plugin = source_plugin(url)
     if plugin is not None:
         return parse_url(url, plugin.scheme, plugin.form, plugin.options)[1]
-    module = importlib.import_module(SCHEMES[_scheme_of(url)])
+    module = _builtin(_scheme_of(url))
     return parse_url(url, module.SCHEME, module.FORM, module.OPTIONS)[1]
 
 
@@ -78,12 +87,7 @@ def open_link(url: str, **kwargs: Any) -> Link:
     plugin = source_plugin(url)
     if plugin is not None:
         return virtual.open_link(url, plugin)
-    scheme = _scheme_of(url)
-    try:
-        module = importlib.import_module(SCHEMES[scheme])
-    except ImportError as exc:
-        raise SourceError(f"{scheme}:// sources are unavailable here: {exc}") from None
-    return module.open_link(url, **kwargs)
+    return _builtin(_scheme_of(url)).open_link(url, **kwargs)
 
 
 def open_source(url: str, *, usb_backend: Any = None, **kwargs: Any) -> CarpetSource:
