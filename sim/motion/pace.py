@@ -29,7 +29,7 @@ import numpy as np
 from sim.motion.rig import BUTT, CONTACT_PARTS, SETTLE, UPRIGHT, euler_deg_to_matrix, min_jerk
 
 MIN_JERK_PEAK_ACC = 10.0 / math.sqrt(3.0)  # max |s''| of s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ on [0, 1]
-_TAU = np.linspace(0.0, 1.0, 25)  # where a key's height is followed
+_TAU = np.linspace(0.0, 1.0, 17)  # where a key's height is followed
 
 
 class Pacer:
@@ -53,10 +53,9 @@ class Pacer:
         local[:, 0] = UPRIGHT @ local[:, 0]
         g_rot, g_t = self.rig.fk(local)
         com_z = self.rig.mass_model.com_from_fk(g_rot, g_t)[:, 2]
-        z = self.rig.vertex_z(local, (g_rot, g_t))
         parts = np.flatnonzero(np.asarray(contact, bool)[:len(CONTACT_PARTS)])
-        idx = np.concatenate([self.rig.part_vertices[p] for p in parts]) if len(parts) else slice(None)
-        h = com_z - z[:, idx].min(1)
+        idx = np.concatenate([self.rig.part_vertices[p] for p in parts]) if len(parts) else None
+        h = com_z - self.rig.vertex_z(local, (g_rot, g_t), idx).min(1)
         return float(h[0]) if one else h
 
     def min_duration_s(self, pose_from: np.ndarray, pose_to: np.ndarray, contact: np.ndarray, anchor: int) -> float:

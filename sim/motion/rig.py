@@ -137,8 +137,9 @@ class Rig:
         rest = np.broadcast_to(self.rest, (local.shape[0],) + self.rest.shape)
         return lbs.forward_kinematics(local, rest, self.levels)
 
-    def _skin_rows(self, local, g_rot, g_t, rows):
-        """Rows (coordinates) of the skinned vertices, pelvis at the origin: (T,V,len(rows))."""
+    def _skin_rows(self, local, g_rot, g_t, rows, vertices=None):
+        """Rows (coordinates) of the skinned vertices, pelvis at the origin: (T,V,len(rows))
+        (vertices: an optional index array, V of them)."""
         if g_rot is None:
             g_rot, g_t = self.fk(local)
         t = g_t - (g_rot @ self.rest[None, :, :, None])[..., 0]
@@ -146,16 +147,27 @@ class Rig:
         if self._posedirs is None:
             n, nj, nr = a.shape[:3]
             flat = np.ascontiguousarray(a.transpose(0, 2, 1, 3), dtype=np.float32).reshape(n * nr, nj * 4)
-            return (flat @ self._wvh).astype(np.float64).reshape(n, nr, -1).transpose(0, 2, 1)
+            wvh = self._wvh if vertices is None else self._wvh_columns(vertices)
+            return (flat @ wvh).astype(np.float64).reshape(n, nr, -1).transpose(0, 2, 1)
         per = np.einsum("vj,tjrk->tvrk", self._weights, a, optimize=True)
         feat = (local[:, 1:] - np.eye(3)).reshape(len(local), -1)
         v = self.rest_vertices[None] + (feat @ self._posedirs).reshape(len(local), -1, 3)
-        return np.einsum("tvrk,tvk->tvr", per[..., :3], v) + per[..., 3]
+        out = np.einsum("tvrk,tvk->tvr", per[..., :3], v) + per[..., 3]
+        return out if vertices is None else out[:, vertices]
 
-    def vertex_z(self, local: np.ndarray, g=None) -> np.ndarray:
-        """Height of every vertex above the pelvis (T,V)."""
+    def _wvh_columns(self, vertices) -> np.ndarray:
+        """The skinning matrix's columns of these vertices (cached by their bytes)."""
+        vertices = np.asarray(vertices)
+        key = vertices.tobytes()
+        cache = self.__dict__.setdefault("_wvh_cache", {})
+        if key not in cache:
+            cache[key] = np.ascontiguousarray(self._wvh[:, vertices])
+        return cache[key]
+
+    def vertex_z(self, local: np.ndarray, g=None, vertices=None) -> np.ndarray:
+        """Height of every vertex (or of ``vertices``, an index array) above the pelvis (T,V)."""
         g_rot, g_t = (None, None) if g is None else g
-        return self._skin_rows(local, g_rot, g_t, [2])[..., 0]
+        return self._skin_rows(local, g_rot, g_t, [2], vertices)[..., 0]
 
     def vertices(self, local: np.ndarray, transl: np.ndarray | None = None) -> np.ndarray:
         v = self._skin_rows(local, None, None, [0, 1, 2])
