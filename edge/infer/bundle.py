@@ -27,7 +27,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from edge.provenance import sha256_file  # noqa: F401  (re-exported: export and tests use it from here)
+from cavatar_common.provenance import sha256_file  # noqa: F401  (re-exported: export and tests use it from here)
 from edge.infer.normalise import NORMALISATION, center_of_pressure_m, check_finite, normalise_kpa
 from edge.infer.rotations import rot6d_to_axis_angle
 
