@@ -239,6 +239,7 @@ def raising_arms(style, rng, seconds, label, pace=None):
 
 
 def lunge(style, rng, seconds, label, pace=None):
+    depth_amp = style.amplitude  # how deep this person lunges: their own range of motion
     style = replace(style, amplitude=float(np.clip(style.amplitude, 0.85, 1.1)))  # a lunge needs a long split stance
     def body(tl, left):
         side = [style.lead]
@@ -248,7 +249,7 @@ def lunge(style, rng, seconds, label, pace=None):
             back = RF if front == LF else LF
             lift = pose(left_hip=(-55, 4, 0), left_knee=(60, 0, 0), root=(0, 0, 2))
             split = pose(left_hip=(-38, 4, 0), left_knee=(8, 0, 0), right_hip=(12, -4, 0), right_knee=(4, 0, 0))
-            a = _u(rng, 0.75, 1.0)
+            a = float(np.clip(_u(rng, 0.75, 1.0) * depth_amp, 0.5, 1.1))
             deep = pose(root=(6 * a, 0, 0), left_hip=(-38 - 40 * a, 4, 0), left_knee=(8 + 70 * a, 0, 0),
                         right_hip=(12 - 6 * a, -4, 0), right_knee=(4 + 66 * a, 0, 0), spine1=(-4, 0, 0))
             if front == RF:
