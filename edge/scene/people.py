@@ -137,18 +137,21 @@ def group_blobs(
     ages_s: np.ndarray | None = None,
     newcomer_s: float = 0.5,
     frame_s: float = 1 / 14,
+    stayed: float | None = None,
 ) -> Grouping:
     """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs.
 
     ages_s: (n,) how long each blob has been with its prior track (0 for new contacts); only
     contacts that joined a track at most newcomer_s before it began to carry more than its weight
     can be split off as someone stepping in (frame_s: the frame interval, to count back).
+    stayed: the fraction of the previous frame's contact pressure still where it was (see
+    :func:`moved_at_once`; None: unknown).
     """
     n = len(centres_m)
     if n == 0:
         return Grouping([], frozenset(), frozenset())
     owner = np.zeros(n, dtype=np.int64)
-    if moved_at_once(forces_n, priors, bodies):
+    if moved_at_once(forces_n, priors, bodies, stayed):
         priors = owner  # everyone's contacts are new: regrouped afresh, each group matched by the tracker
     for i in range(n):
         k = int(priors[i])
@@ -189,10 +192,12 @@ def group_blobs(
     return Grouping(groups, frozenset(far), frozenset(heavy))
 
 
-def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Body]) -> bool:
+def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Body], stayed: float | None = None) -> bool:
     """True when two or more tracks had contacts in the previous frame, the contacts that stayed with their
-    tracks carry less than MOVED_KEEP_FRACTION of what all of them carried then, and new contacts carry
-    most of the force: everyone moved at once (sim:// starting a new scene). Contacts left behind fading
+    tracks carry less than MOVED_KEEP_FRACTION of what all of them carried then (or less than that
+    fraction of the previous frame's contact pressure is ``stayed`` where it was: new contacts landing
+    across old footprints keep those footprints' keys), and new contacts carry most of the force:
+    everyone moved at once (sim:// starting a new scene). Contacts left behind fading
     out would otherwise keep their tracks anchored and let them reach the new contacts of other people.
     A single body whose contacts all move (a push-up's hands and feet resettling) stays with its track."""
     seen = [b.last_force_n for b in bodies.values() if b.last_force_n is not None]
@@ -200,7 +205,8 @@ def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Bo
         return False
     before = sum(seen)
     kept = float(forces_n[np.isin(priors, list(bodies))].sum())
-    return kept < MOVED_KEEP_FRACTION * before and float(forces_n.sum()) - kept >= kept
+    gone = kept < MOVED_KEEP_FRACTION * before or (stayed is not None and stayed < MOVED_KEEP_FRACTION)
+    return gone and float(forces_n.sum()) - kept >= kept
 
 
 def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, faint_n: float) -> np.ndarray:

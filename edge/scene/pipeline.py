@@ -66,6 +66,7 @@ class SceneTracker:
         self._last_t_s: float | None = None
         self._dt_s = 1.0 / 14.0  # the frame interval, followed as frames come (sets split_s in frames)
         self._prev_keys: np.ndarray | None = None
+        self._prev_pressure: np.ndarray | None = None  # (H, W) the filtered pressure of the previous frame with contacts
         self._prev_join: np.ndarray | None = None  # (H, W) when each contact sensel's blob joined its track, s
         self.counters: dict[str, int] = {"frames": 0, "valid": 0, "empty": 0, "still": 0,
                                          **{f"rejected_{r}": 0 for r in REASONS}}
@@ -160,7 +161,8 @@ class SceneTracker:
         joined = self._joined_s(labels, priors, t_s)
         split_frames = max(1, int(round(cfg.split_s / self._dt_s)))
         grouping = group_blobs(centres, forces, priors, self.people.bodies(t_s), cfg.group_radius_m, cfg.split_distance_m,
-                               cfg.min_person_force_n, split_frames, t_s - joined, cfg.newcomer_s, self._dt_s)
+                               cfg.min_person_force_n, split_frames, t_s - joined, cfg.newcomer_s, self._dt_s,
+                               self._stayed(filtered))
         groups = grouping.groups
         lut = np.zeros(len(blobs) + 1, dtype=np.int32)
         for g, (idx, _) in enumerate(groups):
@@ -193,6 +195,7 @@ class SceneTracker:
         for g, tr in enumerate(tracks):
             keys[g + 1] = 0 if tr is None else tr.key
         self._prev_keys = keys[owner]
+        self._prev_pressure = filtered
         blob_key = np.zeros(len(blobs) + 1, dtype=np.int64)
         for (idx, _), tr in zip(groups, tracks):
             blob_key[idx + 1] = 0 if tr is None else tr.key
@@ -207,6 +210,17 @@ class SceneTracker:
                 area_m2=float(sum(blobs[i].area_m2 for i in idx)), velocity_m_s=tr.velocity_m_s.copy(), mask=mask,
                 bbox=_bbox(mask), contacts=len(idx), still=self._stillness(tr, filtered, mask), age_s=t_s - tr.first_t_s))
         return out
+
+    def _stayed(self, filtered: np.ndarray) -> float | None:
+        """Of the pressure on the tracks' contact sensels in the previous frame, the fraction still there now
+        (per sensel the lesser of then and now): ~1 while people stand or walk (a stance foot stays), ~0.3 when
+        everyone moved at once (only the fading footprints and chance overlaps remain). None: no previous frame."""
+        if self._prev_keys is None or self._prev_pressure is None:
+            return None
+        on = self._prev_keys > 0
+        before = self._prev_pressure[on]
+        total = float(before.sum(dtype=np.float64))
+        return float(np.minimum(before, filtered[on]).sum(dtype=np.float64)) / total if total > 0 else None
 
     def _joined_s(self, labels: np.ndarray, priors: np.ndarray, t_s: float) -> np.ndarray:
         """(n_blobs,) when each blob's contact joined the track it had last frame (its prior); t_s for new ones."""

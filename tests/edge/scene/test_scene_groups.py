@@ -152,3 +152,12 @@ def test_a_third_stepping_in_beside_two():
     # track until the weight split hands it over: its centre moves, its id does not)
     for tid in first_two:
         assert min(np.linalg.norm(log[-1][tid] - np.array(c)) for c in BEFORE[:2]) < 0.05, log[-1]
+
+
+def test_new_feet_landing_on_old_footprints_do_not_hide_that_everyone_moved():
+    # body 2's old footprint is under A's new feet (they inherit its key) and body 1's fades: by the blobs'
+    # keys half the force stayed; by the pressure, only what fades and where the feet overlap did
+    centres, forces, priors, bodies = _moved_scene(kept_n=200.0)
+    assert not moved_at_once(forces, priors, bodies)  # 500 N of 900 N kept by the keys alone
+    assert moved_at_once(forces, priors, bodies, stayed=0.35)
+    assert not moved_at_once(forces, priors, bodies, stayed=0.9)  # the pressure stayed: people stepping
