@@ -99,7 +99,10 @@ def test_sigterm_publishes_offline_itself_and_exits_0(tmp_path, mqtt_broker, sub
     assert proc.returncode == 0, err
     assert sub.wait_for(f"cavatar/{device}/status", b"offline", 5.0)
     statuses = [p for p, _ in sub.on(f"cavatar/{device}/status")]
-    assert statuses == [b"online", b"offline"]
+    # "online" may come twice: the connect's announce and the runtime's own publish_status can both send it
+    # when they race (edge/sinks/mqtt.py: a state is never lost, at worst repeated); no other order is right
+    changes = [s for i, s in enumerate(statuses) if i == 0 or s != statuses[i - 1]]
+    assert changes == [b"online", b"offline"] and statuses.count(b"offline") == 1
     # a clean DISCONNECT (the will is not sent on one): so "offline" is the runtime's own publish
     assert client_log(broker, device)[-1] == f"Client cavatar-{device} disconnected."
     status = json.loads((out / "status.json").read_text())
