@@ -33,24 +33,26 @@ calibration's coverage walk.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from calibration.file import Calibration
+from cavatar_common.config import Check, StrictConfig, at_least_one, at_least_zero, described
 
 
-def _f(default: Any, doc: str) -> Any:
-    return field(default=default, metadata={"doc": doc})
+def _f(default: Any, doc: str, check: Check = at_least_zero) -> Any:
+    return described(default, doc, check)
 
 
 @dataclass(frozen=True)
-class DriftConfig:
-    """Thresholds of the recalibration advice (see ``describe()``)."""
+class DriftConfig(StrictConfig):
+    """Thresholds of the recalibration advice (see ``describe()``); every one ≥ 0."""
+
+    WHAT: ClassVar[str] = "drift"
 
     offset_sigmas: float = _f(3.0, "global baseline offset (median over sensels) above this many noise σ ...")
     offset_hold_s: float = _f(600.0, "... for longer than this advises recalibration")
@@ -63,7 +65,7 @@ class DriftConfig:
     temperature_hold_s: float = _f(30.0, "... for longer than this")
     temperature_clear_c: float = _f(8.0, "the temperature advice re-arms closer than this")
     weight_tolerance: float = _f(0.15, "advise when a known person's weight is off by more than this fraction ...")
-    weight_reports: int = _f(3, "... in the median of their last this-many reports")
+    weight_reports: int = _f(3, "... in the median of their last this-many reports", at_least_one)
     weight_clear: float = _f(0.10, "the weight advice re-arms (per person) below this fraction")
     max_age_days: float = _f(180.0, "advise recalibrating a calibration older than this")
     clear_hold_s: float = _f(60.0, "a condition must be gone this long before its advice re-arms")
@@ -73,28 +75,12 @@ class DriftConfig:
     dead_fraction: float = _f(0.05, "a line is dead when it sees at most this fraction of the contacts of both neighbours ...")
     dead_min_events: int = _f(40, "... each of which saw at least this many contact sensel-updates in the window")
     dead_min_straddles: int = _f(5, "... and contacts straddled the quiet lines (the lines on both sides touched at the same place and time) this often")
-    dead_max_run: int = _f(12, "at most this many adjacent quiet lines are judged together (a foot must be able to straddle them)")
+    dead_max_run: int = _f(12, "at most this many adjacent quiet lines are judged together (a foot must be able to straddle them)",
+                           at_least_one)
     activity_window_s: float = _f(600.0, "contacts per line are counted over windows this long")
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"{f.name} must be a finite number ≥ 0, got {v!r}")
-        if self.weight_reports < 1 or self.dead_max_run < 1:
-            raise ValueError("weight_reports and dead_max_run must be ≥ 1")
-
-    @classmethod
-    def from_dict(cls, values: dict[str, Any]) -> "DriftConfig":
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(f"unknown drift option(s) {', '.join(unknown)}; accepted: {', '.join(sorted(known))}")
-        return cls(**values)
-
-    @classmethod
-    def describe(cls) -> dict[str, str]:
-        return {f.name: f"{f.metadata['doc']} (default {f.default!r})" for f in dataclasses.fields(cls)}
+        self.check_fields()
 
 
 KINDS = ("offset_drift", "sensel_drift", "line_failed", "temperature", "weight", "age")

@@ -29,11 +29,10 @@ median at once.
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import datetime, timezone
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, ClassVar, Iterator
 
 import numpy as np
 from scipy import ndimage
@@ -41,58 +40,45 @@ from scipy import ndimage
 from calibration.apply import Applier
 from calibration.drift import Advice, DriftConfig, DriftMonitor, LineWatch
 from calibration.file import Calibration
+from cavatar_common.config import StrictConfig, at_least_zero, described, positive
 
 
-def _f(default: Any, doc: str) -> Any:
-    return field(default=default, metadata={"doc": doc})
+def _two_positive(v: tuple[int, int]) -> str | None:
+    return None if all(b >= 1 for b in v) else "must be two positive integers"
+
+
+_f = described
 
 
 @dataclass(frozen=True)
-class BaselineConfig:
+class BaselineConfig(StrictConfig):
     """Contact-gated slow baseline tracking (see ``describe()``)."""
 
+    WHAT: ClassVar[str] = "baseline"
+
     enabled: bool = _f(True, "track the baseline at all (False: the calibration's baseline, forever)")
-    update_interval_s: float = _f(1.0, "the tracker runs on the mean of the frames of this interval")
-    tau_s: float = _f(300.0, "time constant of each sensel's own slow baseline")
-    holdoff_s: float = _f(60.0, "a sensel updates only after it and its neighbours have been free of contact this long")
-    neighbour_mm: float = _f(60.0, "contact blocks updates within this distance (the contact mask is grown by it)")
-    contact_sigmas: float = _f(5.0, "contact: the update's mean above the baseline by this many σ/√frames ...")
-    contact_margin_sigmas: float = _f(0.5, "... plus this many σ (a floor when many frames are averaged)")
-    common_tau_s: float = _f(20.0, "time constant of the per-tile common-mode offset (front-end drift)")
-    blocks: tuple[int, int] = _f((3, 3), "tiles (rows, cols) with their own common-mode offset: the readout tiles")
-    min_free_fraction: float = _f(0.2, "a tile's common mode updates only while this fraction of its sensels is free")
-    step_fraction: float = _f(0.6, "more of a tile than this 'in contact', all by about the same amount, ...")
-    step_spread_sigmas: float = _f(4.0, "... (interquartile range below this many σ) is an offset step, not people")
-    max_step_s: float = _f(60.0, "one update never counts for more than this much time (after a gap in the stream)")
+    update_interval_s: float = _f(1.0, "the tracker runs on the mean of the frames of this interval", positive)
+    tau_s: float = _f(300.0, "time constant of each sensel's own slow baseline", positive)
+    holdoff_s: float = _f(60.0, "a sensel updates only after it and its neighbours have been free of contact this long",
+                          at_least_zero)
+    neighbour_mm: float = _f(60.0, "contact blocks updates within this distance (the contact mask is grown by it)",
+                             at_least_zero)
+    contact_sigmas: float = _f(5.0, "contact: the update's mean above the baseline by this many σ/√frames ...", positive)
+    contact_margin_sigmas: float = _f(0.5, "... plus this many σ (a floor when many frames are averaged)", at_least_zero)
+    common_tau_s: float = _f(20.0, "time constant of the per-tile common-mode offset (front-end drift)", positive)
+    blocks: tuple[int, int] = _f((3, 3), "tiles (rows, cols) with their own common-mode offset: the readout tiles",
+                                 _two_positive)
+    min_free_fraction: float = _f(0.2, "a tile's common mode updates only while this fraction of its sensels is free",
+                                  at_least_zero)
+    step_fraction: float = _f(0.6, "more of a tile than this 'in contact', all by about the same amount, ...",
+                              at_least_zero)
+    step_spread_sigmas: float = _f(4.0, "... (interquartile range below this many σ) is an offset step, not people",
+                                   at_least_zero)
+    max_step_s: float = _f(60.0, "one update never counts for more than this much time (after a gap in the stream)",
+                           positive)
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if f.name == "enabled":
-                if not isinstance(v, bool):
-                    raise ValueError(f"enabled must be true or false, got {v!r}")
-            elif f.name == "blocks":
-                if (not isinstance(v, tuple) or len(v) != 2
-                        or not all(isinstance(b, int) and not isinstance(b, bool) and b >= 1 for b in v)):
-                    raise ValueError(f"blocks must be two positive integers, got {v!r}")
-            elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"{f.name} must be a finite number ≥ 0, got {v!r}")
-        for name in ("update_interval_s", "tau_s", "common_tau_s", "contact_sigmas", "max_step_s"):
-            if getattr(self, name) <= 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-
-    @classmethod
-    def from_dict(cls, values: dict[str, Any]) -> "BaselineConfig":
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(f"unknown baseline option(s) {', '.join(unknown)}; accepted: {', '.join(sorted(known))}")
-        values = {k: tuple(v) if k == "blocks" and isinstance(v, list) else v for k, v in values.items()}
-        return cls(**values)
-
-    @classmethod
-    def describe(cls) -> dict[str, str]:
-        return {f.name: f"{f.metadata['doc']} (default {f.default!r})" for f in dataclasses.fields(cls)}
+        self.check_fields()
 
 
 _RAIL_MARGIN_COUNTS = 2.0  # within this of the rail a mean reading is censored (as Applier's rail_margin_counts)

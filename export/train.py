@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from cavatar_common.config import strict_from_dict
 from export.model import CAvatarNet, JointDiscriminator, ModelConfig
 
 CHECKPOINT = "checkpoint.pt"
@@ -65,8 +66,6 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "TrainConfig":
-        from export.model.config import strict_from_dict
-
         return strict_from_dict(cls, d, "training")
 
     def data_paths(self) -> list[str]:

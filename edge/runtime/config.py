@@ -18,15 +18,15 @@ sink URL names with ``password_env=``); a key that looks like one is refused, sa
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
 
 from calibration.runtime import BaselineConfig
+from cavatar_common.config import at_least_zero, between, described, expected_type, positive
 from edge.scene import SceneConfig
 from edge.scene.falls import FallConfig
 
@@ -52,27 +52,7 @@ class ConfigError(ValueError):
 # ----------------------------------------------------------------------------- field checks
 
 
-def _f(default: Any, doc: str, check: Callable[[Any], str | None] | None = None) -> Any:
-    if isinstance(default, list):
-        return field(default_factory=lambda: list(default), metadata={"doc": doc, "check": check})
-    return field(default=default, metadata={"doc": doc, "check": check})
-
-
-def _positive(v: Any) -> str | None:
-    return None if v > 0 else "must be > 0"
-
-
-def _at_least_zero(v: Any) -> str | None:
-    return None if v >= 0 else "must be ≥ 0"
-
-
-def _at_least_one(v: Any) -> str | None:
-    return None if v >= 1 else "must be ≥ 1"
-
-
-def _between(lo: int, hi: int) -> Callable[[Any], str | None]:
-    """A bounded count: a huge one would hang or exhaust the board rather than fail."""
-    return lambda v: f"must be ≥ {lo}" if v < lo else (f"must be ≤ {hi}" if v > hi else None)
+_f = described  # short: the field tables below are long
 
 
 def _device_id(v: str) -> str | None:
@@ -154,12 +134,12 @@ class SourceSection:
                   _source_url)
     queue_frames: int = _f(4, "frames held between the reader thread and the pipeline; when the pipeline falls behind a "
                               "live board the oldest is dropped (counted), so it always works on the newest frame",
-                           _between(1, 1024))
+                           between(1, 1024))
     missing_rows: str = _f("drop", "a frame with rows lost on the link: 'drop' it, or 'flag' (repair up to 4 rows from "
                                    "the last good frame)", _missing_rows)
     board_timeout_s: float = _f(5.0, "no good frame from the board for this long → the board is reported unavailable "
                                      "(MQTT board topic \"offline\", presence withdrawn, one WARNING); the first good "
-                                     "frame after it → available again (one WARNING)", _positive)
+                                     "frame after it → available again (one WARNING)", positive)
 
 
 @dataclass(frozen=True)
@@ -169,7 +149,7 @@ class CalibrationSection:
     file: str = _f("", "calibration file written by `cavatar calibrate`; empty: a sim:// source is calibrated "
                        "automatically (the scripted session, saved beside the status file), a real carpet is refused")
     max_age_days: float = _f(180.0, "a calibration older than this is reported as due (status, `cavatar doctor`)",
-                             _positive)
+                             positive)
     baseline: BaselineConfig = field(default_factory=BaselineConfig,
                                      metadata={"doc": "runtime baseline tracking: see [calibration.baseline]"})
 
@@ -180,7 +160,7 @@ class ModelSection:
 
     bundle: str = _f("", "model bundle folder; empty: the shipped bundle (edge/models/lean-96)")
     threads: int = _f(1, "onnxruntime intra-op threads per model (1 suits a 2-core board: the reader and "
-                         "publisher threads need the other core)", _between(1, 64))
+                         "publisher threads need the other core)", between(1, 64))
     resolve_heading: bool = _f(True, "turn a body the model publishes facing backwards (180° about the vertical) when "
                                      "the feet's pressure says so, per track (edge/infer/heading.py)")
     heading_params: str = _f("", "the heading resolver's fitted parameters (JSON); empty: the shipped "
@@ -196,7 +176,7 @@ class SinksSection:
                          "mqtt://user@host:1883/prefix?qos=1&spool=DIR (password from $CAVATAR_MQTT_PASSWORD)",
                          _sink_urls)
     queue_records: int = _f(256, "records held between the pipeline and the publisher thread; when full the oldest "
-                                 "is dropped (counted)", _between(1, 100_000))
+                                 "is dropped (counted)", between(1, 100_000))
 
 
 @dataclass(frozen=True)
@@ -205,14 +185,14 @@ class RuntimeSection:
 
     status_file: str = _f(f"{DEFAULT_OUTPUT_DIR}/status.json", "health counters written here (atomically) every "
                                                                 "status_s; `cavatar status` reads it")
-    seconds: float = _f(0.0, "stop after this long; 0 = run until stopped (SIGTERM, Ctrl-C)", _at_least_zero)
-    summary_s: float = _f(1.0, "period of the one-line live summary on stderr; 0 = none", _at_least_zero)
-    status_s: float = _f(1.0, "period of the status file", _positive)
+    seconds: float = _f(0.0, "stop after this long; 0 = run until stopped (SIGTERM, Ctrl-C)", at_least_zero)
+    summary_s: float = _f(1.0, "period of the one-line live summary on stderr; 0 = none", at_least_zero)
+    status_s: float = _f(1.0, "period of the status file", positive)
     info_s: float = _f(10.0, "period of the health/info payload published to the sinks (MQTT: retained info topic)",
-                       _positive)
+                       positive)
     heartbeat_s: float = _f(1.0, "while nobody is on the carpet, a heartbeat record (people: []) this often "
-                                 "(and at once when the carpet becomes empty)", _positive)
-    timing_window: int = _f(512, "per-stage milliseconds are median / p99 over this many recent frames", _between(1, 100_000))
+                                 "(and at once when the carpet becomes empty)", positive)
+    timing_window: int = _f(512, "per-stage milliseconds are median / p99 over this many recent frames", between(1, 100_000))
 
 
 SECTIONS: dict[str, type] = {
@@ -334,22 +314,6 @@ def _unknown(values: dict, known: Any, prefix: str, problems: list[str]) -> None
             problems.append(f"{path}: unknown key; {where} accepts: {', '.join(sorted(known))}")
 
 
-def _expected(f: dataclasses.Field) -> tuple[str, Callable[[Any], bool]]:
-    t = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
-    t = t.replace("typing.", "")
-    if t == "bool":
-        return "a boolean (true/false)", lambda v: isinstance(v, bool)
-    if t == "int":
-        return "an integer", lambda v: isinstance(v, int) and not isinstance(v, bool)
-    if t == "float":
-        return "a number", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-    if t == "str":
-        return "a string", lambda v: isinstance(v, str)
-    if t == "list[str]":
-        return "an array of strings", lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v)
-    raise TypeError(f"configuration field {f.name} has unsupported type {t}")
-
-
 def _section(kind: type, raw: dict, name: str, problems: list[str]) -> Any:
     fields = {f.name: f for f in dataclasses.fields(kind)}
     _unknown(raw, fields, f"{name}.", problems)
@@ -365,7 +329,7 @@ def _section(kind: type, raw: dict, name: str, problems: list[str]) -> Any:
             else:
                 kwargs[key] = _delegated(BaselineConfig, v, path, problems)
             continue
-        what, ok = _expected(f)
+        what, ok = expected_type(f)
         if not ok(v):
             problems.append(f"{path}: must be {what}, got {_type_name(v)} {v!r}")
             continue

@@ -9,9 +9,10 @@ written by a newer version fails loudly instead of building a different network.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
+from cavatar_common.config import strict_from_dict
 from sim.motion import ACTIVITIES
 
 NUM_JOINTS = 24
@@ -86,16 +87,7 @@ class ModelConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "ModelConfig":
-        return strict_from_dict(cls, d, "model")
-
-
-def strict_from_dict(cls: type, d: dict[str, Any], what: str) -> Any:
-    """``cls(**d)`` for a dataclass, refusing unknown keys (a file written by a newer version fails loudly)."""
-    known = {f.name for f in fields(cls)}
-    unknown = sorted(set(d) - known)
-    if unknown:
-        raise ValueError(f"unknown {what} config keys {unknown}; known: {sorted(known)}")
-    return cls(**d)
+        return strict_from_dict(cls, d, "model config")
 
 
 PRESETS: dict[str, ModelConfig] = {
