@@ -29,8 +29,11 @@ STANDING = ACTIVITIES.index("standing")
 # (feet flattened and locked by IK) and for repetitions squeezed by up to ~10 % to fill the
 # sequence (acceleration ∝ 1/T²). Stepping and lunging move the body more briskly
 # (~0.8–1.2 × mg). Not paced: the push-up and the sit-up, whose getting down and up must fit
-# the sequence anyway (a slower descent only squeezes the rest; measured, it did not help).
-VERTICAL_ACC_LIMIT_M_S2 = {a: 0.62 for a in ("bending", "squat", "twisting", "raising_arms", "sitting", "standing")} | {
+# the sequence anyway (a slower descent only squeezes the rest; measured, it did not help), and
+# sitting: a paced (~3 s) sit-down made the runtime split the person into two tracks on the
+# board's path (`make run`, seed 7: a third body in 26 % of frames) for a gain of 2 points in
+# the force check; the scene must learn to hold a slow sit-down together first (issue 12).
+VERTICAL_ACC_LIMIT_M_S2 = {a: 0.62 for a in ("bending", "squat", "twisting", "raising_arms", "standing")} | {
     "stepping": 1.6, "turning": 1.6, "lunge": 1.6}
 FEET = both_feet()
 
