@@ -15,10 +15,14 @@ may keep the old file — for files rewritten every second on a tmpfs (the statu
 
 from __future__ import annotations
 
+import itertools
 import os
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
+
+
+_WRITES = itertools.count()  # one temporary name per write: two threads may write the same target at once
 
 
 def _fsync_path(path: Path, directory: bool = False) -> None:
@@ -33,7 +37,7 @@ def _fsync_path(path: Path, directory: bool = False) -> None:
 def atomic_path(path: str | Path, durable: bool = True) -> Iterator[Path]:
     """A temporary path beside ``path`` (same suffix, so writers that add one do not); becomes ``path`` on success."""
     target = Path(path)
-    tmp = target.with_name(f".{target.stem}.{os.getpid()}.part{target.suffix}")
+    tmp = target.with_name(f".{target.stem}.{os.getpid()}.{next(_WRITES)}.part{target.suffix}")
     try:
         yield tmp
         if durable:

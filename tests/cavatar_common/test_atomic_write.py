@@ -44,3 +44,28 @@ def test_durable_writes_fsync_the_file_and_the_folder(tmp_path, monkeypatch):
     synced.clear()
     write_atomic(tmp_path / "status.json", "{}", durable=False)
     assert synced == []
+
+
+def test_two_threads_writing_one_target_never_collide(tmp_path):
+    """The runtime's status thread and its stop() may write the status file at the same moment: each write
+    has its own temporary file, so neither rename finds its file taken by the other."""
+    import threading
+
+    from cavatar_common.atomic import write_atomic
+
+    target, errors = tmp_path / "status.json", []
+
+    def writer(k: int) -> None:
+        try:
+            for i in range(300):
+                write_atomic(target, f"{k} {i}\n", durable=False)
+        except OSError as exc:  # FileNotFoundError when two writes shared one temporary name
+            errors.append(exc)
+
+    threads = [threading.Thread(target=writer, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert target.read_text().split()[1] == "299" and not list(tmp_path.glob(".*.part*"))
