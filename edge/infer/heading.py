@@ -125,8 +125,6 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
     starts = np.searchsorted(lab[order], np.arange(1, n + 1))
     sums = np.add.reduceat(np.stack([np.ones_like(x), x, y, x * x, y * y, x * y, w, w * x, w * y], -1)[order], starts)
     count, sx, sy, sxx, syy, sxy, force, swx, swy = sums.T
-    peak = ndimage.maximum(p[box], labels, np.arange(1, n + 1))
-    at_peak = np.bincount(lab, weights=w >= 0.98 * peak[lab - 1], minlength=n + 1)[1:]
     mx, my = sx / count, sy / count
     dof = np.maximum(count - 1, 1)
     sxx, syy, sxy = (sxx - count * mx * mx) / dof, (syy - count * my * my) / dof, (sxy - count * mx * my) / dof
@@ -150,7 +148,10 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
         return -np.sign(skew[vote])[:, None] * axis[vote], share
     offset_mm = ((np.stack([mx, my], -1) - cop) * axis).sum(-1) * pitch_m * 1e3  # > 0: the toes lie along +axis
     vote = foot & (np.abs(offset_mm) >= params.min_offset_mm) & (np.abs(offset_mm) <= params.max_offset_mm)
-    vote &= at_peak <= params.max_plateau_share * count  # a saturated blob's CoP says nothing of its heel
+    if params.max_plateau_share < 1.0:  # a saturated blob's CoP says nothing of its heel
+        peak = ndimage.maximum(p[box], labels, np.arange(1, n + 1))
+        at_peak = np.bincount(lab, weights=w >= 0.98 * peak[lab - 1], minlength=n + 1)[1:]
+        vote &= at_peak <= params.max_plateau_share * count
     return np.sign(offset_mm[vote])[:, None] * axis[vote], share
 
 
