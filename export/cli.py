@@ -42,6 +42,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     t.add_argument("--cache-copies", type=int, default=2,
                    help="--stage head: feature-cache copies of every frame, copy c turned by c quarter turns (default 2; 4 sees every heading)")
+    t.add_argument("--input", default="clean", choices=("clean", "board"),
+                   help="clean (default): the simulator's true pressure through the training corruption; board: the raw "
+                   "counts through each carpet's calibration, as a board reads them (datasets generated with "
+                   "`cavatar sim generate --calibration installer`)")
     t.add_argument("--no-turns", action="store_true", help="do not turn the carpet by random quarter turns (frames, head stages)")
     t.add_argument("--exclude-activity", action="append", default=[], metavar="NAME",
                    help="never train on this activity (leave-one-activity-out); repeatable")
@@ -148,7 +152,7 @@ def run_train(args: argparse.Namespace) -> int:
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
     cfg = TrainConfig(data=args.data, out=args.out, stage=args.stage, init=args.init, exclude_activities=args.exclude_activity,
-                      cache_copies=args.cache_copies, turns=not args.no_turns, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr, lr_schedule=args.lr_schedule,
+                      cache_copies=args.cache_copies, input=args.input, turns=not args.no_turns, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr, lr_schedule=args.lr_schedule,
                       weight_decay=args.weight_decay, optimizer=args.optimizer, seed=args.seed, checkpoint_every=args.checkpoint_every,
                       val_every=args.val_every, device=args.device, threads=args.threads)
     from sim.dataset import DatasetError
