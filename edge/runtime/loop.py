@@ -31,12 +31,12 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
-from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
-from edge.runtime.errors import SetupError
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
+from edge.runtime.errors import SetupError
 from edge.runtime.publisher import Publisher
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
 

@@ -33,10 +33,12 @@ class SceneConfig:
     # --- filters (each can be switched off) -------------------------------------------
     temporal_median: bool = _f(False, "median of the last 3 frames per sensel (kills one-frame glitches, adds 1 frame of lag to steps)")
     fill_masked: bool = _f(True, "replace masked (unusable) sensels by the mean of their usable 8-neighbours")
-    fill_max_distance_mm: float = _f(40.0, "masked sensels farther than this from a usable one take its nearest value only up to here; beyond, 0")
+    fill_max_distance_mm: float = _f(
+        40.0, "masked sensels farther than this from a usable one take its nearest value only up to here; beyond, 0")
     median_3x3: bool = _f(True, "3×3 spatial median against salt noise")
     median_max_pitch_mm: float = _f(
-        25.0, "run the 3×3 median only at pitches up to this: at a coarser pitch 3 sensels are wider than a foot (~9 cm) and it would erase it")
+        25.0, "run the 3×3 median only at pitches up to this: at a coarser pitch 3 sensels are wider than a foot "
+              "(~9 cm) and it would erase it")
     gaussian_sigma_mm: float = _f(13.3, "Gaussian smoothing σ (0.7 sensel at 19.05 mm); 0 switches it off; skipped below 0.3 sensel")
     ema_tau_s: float = _f(0.05, "time constant of the per-sensel exponential moving average; 0 switches it off")
     # --- contact detection -----------------------------------------------------------
@@ -48,14 +50,20 @@ class SceneConfig:
     grow_fraction: float = _f(0.5, "a contact grows (8-connected) over sensels above this fraction of the start threshold")
     min_blob_area_cm2: float = _f(6.0, "contacts smaller than this are ignored")
     # --- grouping blobs into people -----------------------------------------------------
-    group_radius_m: float = _f(0.6, "contacts no track reaches belong to one new person when all lie within this of each other (centre to centre)")
-    reach_m: float = _f(0.6, "a new contact joins a body within this beyond the body's extent (its farthest contact from its centre): a stride, a hand put down")
+    group_radius_m: float = _f(0.6, "contacts no track reaches belong to one new person when all lie within this of each "
+                                    "other (centre to centre)")
+    reach_m: float = _f(0.6, "a new contact joins a body within this beyond the body's extent (its farthest contact from "
+                             "its centre): a stride, a hand put down")
     extent_memory_s: float = _f(2.0, "a body's extent is forgotten with this time constant (someone who lay down and stood up)")
-    split_distance_m: float = _f(1.5, "one track's contacts in parts farther apart than this (centre to centre) for split_s become two tracks; a push-up spans 1.3 m")
-    split_s: float = _f(0.5, "how long a split must be seen (parts too far apart, or a part carrying more than the body's weight) before it is made")
-    newcomer_s: float = _f(0.5, "contacts that joined a body at most this long before it began to carry more than its weight can be split off as someone who stepped in beside it")
+    split_distance_m: float = _f(1.5, "one track's contacts in parts farther apart than this (centre to centre) for "
+                                      "split_s become two tracks; a push-up spans 1.3 m")
+    split_s: float = _f(0.5, "how long a split must be seen (parts too far apart, or a part carrying more than the "
+                             "body's weight) before it is made")
+    newcomer_s: float = _f(0.5, "contacts that joined a body at most this long before it began to carry more than its "
+                                "weight can be split off as someone who stepped in beside it")
     weight_tau_s: float = _f(3.0, "time constant of a body's weight estimate (the force of its contacts)")
-    min_person_force_n: float = _f(80.0, "a new person needs at least this total force (a child of 8 kg) to start a track; a track carrying this much more than its weight has someone beside it")
+    min_person_force_n: float = _f(80.0, "a new person needs at least this total force (a child of 8 kg) to start a track; "
+                                         "a track carrying this much more than its weight has someone beside it")
     mask_margin_mm: float = _f(40.0, "each person's mask is their contacts grown by this margin (never onto another person's contacts)")
     # --- tracking -----------------------------------------------------------------------
     track_gate_m: float = _f(0.5, "an unassigned person matches a track (Hungarian, on distance) only within this of its prediction")
@@ -72,7 +80,8 @@ class SceneConfig:
     derivative_cutoff_hz: float = _f(1.0, "one-euro cutoff of the derivative estimate")
     # --- stillness ---------------------------------------------------------------------
     still_rms_kpa: float | None = _f(
-        None, "a person is still when the RMS change of their pressure since the last non-still frame is below this; None = max(3·noise, 0.05 kPa)")
+        None, "a person is still when the RMS change of their pressure since the last non-still frame is below this; "
+              "None = max(3·noise, 0.05 kPa)")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

@@ -37,7 +37,6 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-
 EVENT_TYPES = ("fall", "person_down")
 EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
 EXERCISE_AREA_FRACTION = 0.05  # ... or its contact area changes by more than this fraction

@@ -46,7 +46,16 @@ from edge import __version__
 from edge.record import ACTIVITY_PATTERN, RecordError, dumps
 from edge.sinks.base import Option, Sink, SinkError, parse_bool, parse_sink_url
 from edge.sinks.spool import Spool
-from edge.topics import DEFAULT_PREFIX, HA_PREFIX, OFFLINE, ONLINE, DeviceTopics, check_prefix, info_payload, presence_payload
+from edge.topics import (
+    DEFAULT_PREFIX,
+    HA_PREFIX,
+    OFFLINE,
+    ONLINE,
+    DeviceTopics,
+    check_prefix,
+    info_payload,
+    presence_payload,
+)
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +125,8 @@ class MqttConfig:
 
     def describe(self) -> str:
         user = f"{self.username}@" if self.username else ""
-        return f"mqtt://{user}{self.host}:{self.port}/{self.prefix} (qos {self.qos}{', tls' if self.tls else ''}{', spool' if self.spool else ''})"
+        extras = f"{', tls' if self.tls else ''}{', spool' if self.spool else ''}"
+        return f"mqtt://{user}{self.host}:{self.port}/{self.prefix} (qos {self.qos}{extras})"
 
 
 def parse(url: str) -> MqttConfig:

@@ -2,9 +2,9 @@
 
 from dataclasses import replace
 
-from edge.runtime import Runtime
-
 from runtime_helpers import read_jsonl, sim_url
+
+from edge.runtime import Runtime
 
 
 def test_a_simulated_fall_raises_events_in_the_runtime_and_stopping_clears_them(config, tmp_path):
