@@ -21,14 +21,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 STEP_FILES = ("empty", "walk", "board", "stance", "holdout")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "calibrate",
+        command_name(__name__),
         help="calibrate a carpet: baseline, faults, gains, response curve; writes the calibration file and a report",
         description="Walks an installer through the calibration steps (self-test, empty capture, coverage walk, "
         "board equilibration, known-weight poses, validation), from a live board (--source), from recordings "

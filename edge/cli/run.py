@@ -27,14 +27,14 @@ import threading
 import time
 from typing import Any
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 REQUIRE_SINKS_S = 10.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "run",
+        command_name(__name__),
         help="run the edge runtime: carpet → calibrated pressure → people → 3D bodies → MQTT / files",
         description=__doc__.split("\n\n", 1)[1].split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,

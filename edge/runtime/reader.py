@@ -10,10 +10,10 @@ since the last frame is recorded as that frame's ``decode`` milliseconds.
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, cast
 
 from edge.runtime.counters import StageTimes
-from edge.sources import CarpetSource, open_link
+from edge.sources import CarpetSource, open_source
 
 
 class _Timed:
@@ -74,10 +74,7 @@ class TimedCarpetSource(CarpetSource):
 
 def open_timed_source(url: str, times: StageTimes, **kwargs: Any) -> TimedCarpetSource:
     """Like :func:`edge.sources.open_source`, with decode timing (not started)."""
-    link = open_link(url)
-    if "speed" not in kwargs and hasattr(link, "speed"):
-        kwargs["speed"] = link.speed
-    return TimedCarpetSource(link, times=times, **kwargs)
+    return cast(TimedCarpetSource, open_source(url, source_class=TimedCarpetSource, times=times, **kwargs))
 
 
 __all__ = ["TimedCarpetSource", "open_timed_source"]
