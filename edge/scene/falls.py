@@ -33,9 +33,12 @@ stopped).
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
+
+from cavatar_common.config import StrictConfig, at_least_zero, described
 
 EVENT_TYPES = ("fall", "person_down")
 EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
@@ -48,14 +51,15 @@ STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this lon
 
 
 def _f(default, doc: str):
-    if isinstance(default, list):
-        return field(default_factory=lambda: list(default), metadata={"doc": doc})
-    return field(default=default, metadata={"doc": doc})
+    """A field of FallConfig: every number is a finite value ≥ 0."""
+    return described(default, doc, at_least_zero if isinstance(default, float) else None)
 
 
 @dataclass(frozen=True)
-class FallConfig:
+class FallConfig(StrictConfig):
     """Fall and person-down events: thresholds in physical units (docs/falls.md)."""
+
+    WHAT: ClassVar[str] = "events"
 
     enabled: bool = _f(True, "detect falls and people down and publish them as events")
     person_down_s: float = _f(30.0, "person_down is raised after someone who arrived on the floor like a fall has "
@@ -100,14 +104,11 @@ class FallConfig:
                                 "model calls the pose)")
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, float) and not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"events.{f.name} must be a finite number ≥ 0, got {v!r}")
+        self.check_fields()  # types, and every number finite and ≥ 0
         if self.fall_window_s > self.down_window_s:
-            raise ValueError("events.fall_window_s must not exceed events.down_window_s")
+            raise ValueError("fall_window_s must not exceed down_window_s")
         if self.person_down_s < self.confirm_s:
-            raise ValueError("events.person_down_s must be at least events.confirm_s")
+            raise ValueError("person_down_s must be at least confirm_s")
 
 
 @dataclass

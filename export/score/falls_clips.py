@@ -93,8 +93,11 @@ class BoardPath:
         from sim.live import live_sensor
 
         path = sim_calibration_path(Path(cal_dir), seed, GRID)
-        cal = Calibration.load(path) if path.exists() else run_sim_session(seed, GRID, 12, PITCH_M * 1e3, path)
-        self.sensor = live_sensor(seed, GRID)  # a fresh carpet of the same seed: its clock starts at 0
+        if path.exists():
+            cal = Calibration.load(path)
+        else:  # the session acts on its own sensor of that carpet; the clips get a fresh one
+            cal = run_sim_session(live_sensor(seed, GRID, 12, PITCH_M * 1e3), seed, path)
+        self.sensor = live_sensor(seed, GRID, 12, PITCH_M * 1e3)  # a fresh carpet of the same seed: clock at 0
         self.step = CalibratedFrames(cal)
 
     def __call__(self, pressure_kpa: np.ndarray, t_s: float):

@@ -1,6 +1,6 @@
 """The fall detector on scripted per-frame body features: each fall kind and hard negative, its events."""
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
@@ -208,6 +208,18 @@ def test_config_refuses_bad_values():
         FallConfig(person_down_s=-1.0)
     with pytest.raises(ValueError, match="fall_window_s"):
         FallConfig(fall_window_s=9.0, down_window_s=6.0)
+    with pytest.raises(ValueError, match="confirm_s must be a number"):
+        FallConfig(confirm_s=float("nan"))
+    with pytest.raises(ValueError, match="enabled must be a boolean"):
+        FallConfig(enabled=1)
+
+
+def test_config_is_strict_and_described():
+    assert FallConfig.from_dict({"person_down_s": 20}).person_down_s == 20.0  # an integer taken for a number
+    with pytest.raises(ValueError, match="unknown events option.*person_down_secs"):
+        FallConfig.from_dict({"person_down_secs": 20.0})
+    docs = FallConfig.describe()
+    assert docs["person_down_s"].endswith("(default 30.0)") and len(docs) == len(fields(FallConfig))
 
 
 class _Clock:
