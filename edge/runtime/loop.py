@@ -312,11 +312,11 @@ class Runtime:
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
+                        for callback in self.on_outcome:
+                            callback(out)
                     if events is not None:
                         for payload in events.frame(out, stages.scene_frame, frame.host_time_s):
                             pub.put_event(payload)
-                        for callback in self.on_outcome:
-                            callback(out)
                     if self._limit_reached() or (deadline is not None and time.monotonic() >= deadline):
                         self._stop.set()
                     if self._stop.is_set():
