@@ -166,7 +166,7 @@ def clip_features(clip: Clip, body, path: str = "board", cal_dir="out/falls") ->
 
 
 def main(argv=None) -> int:
-    """python -m export.score.falls_clips OUT.jsonl SEED [SEED …] [--ordinary-s S]: append clip features."""
+    """python -m export.score.falls_clips OUT.jsonl SEED [SEED …] [--ordinary-s S] [--what A,B]: append clip features."""
     import argparse
     import json
     from pathlib import Path
@@ -178,6 +178,7 @@ def main(argv=None) -> int:
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--ordinary-s", type=float, default=30.0)
     ap.add_argument("--only", choices=("falls", "negatives"))
+    ap.add_argument("--what", help="only these scenarios / activities, comma-separated (e.g. slow_collapse,lie_down)")
     ap.add_argument("--path", choices=("board", "clean"), default="board",
                     help="board: sensor model raw counts → calibration (default); clean: the contact model's pressure")
     ap.add_argument("--cal-dir", default="out/falls", help="where the virtual carpets' calibrations are kept")
@@ -188,6 +189,13 @@ def main(argv=None) -> int:
     if out.exists():
         done = {json.loads(line)["name"] for line in out.read_text().splitlines() if line.strip()}
     clips = clip_list(a.seeds, a.ordinary_s, falls=a.only != "negatives", negatives=a.only != "falls")
+    if a.what:
+        wanted = set(a.what.split(","))
+        unknown = wanted - {c.what for c in clip_list([0], a.ordinary_s)}
+        if unknown:
+            ap.error(f"--what: unknown {', '.join(sorted(unknown))}; accepted: scenario or activity names of the clip list "
+                     "(e.g. slow_collapse,lie_down,sitting,pet,bag)")
+        clips = [c for c in clips if c.what in wanted]
     for clip in clips:
         if clip.name in done:
             continue
