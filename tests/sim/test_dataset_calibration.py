@@ -124,3 +124,16 @@ def test_a_frames_run_trains_on_the_board_path_and_refuses_an_unknown_input(cali
     with pytest.raises(ValueError, match="'clean' or 'board'"):
         Trainer(TrainConfig(data=str(calibrated), out=str(tmp_path / "x"), stage="frames", input="counts"),
                 ModelConfig.preset("tiny"))
+
+
+def test_board_path_masks_a_person_alone_to_their_footprint_as_the_runtime_does(calibrated):
+    from scipy import ndimage
+
+    board = load_tracks(calibrated, "test", board=True) + load_tracks(calibrated, "train", board=True)
+    truth = load_tracks(calibrated, "test") + load_tracks(calibrated, "train")
+    for b, t in zip(board, truth):
+        pt = t.pressure_kpa.astype(np.float32)
+        footprint = np.stack([ndimage.binary_dilation(f > 0.2, iterations=2) for f in pt])
+        assert not b.pressure_kpa[~footprint].any()  # nothing read away from the person reaches the model
+        # and their own load does (the sensor reads less than the truth: saturation, crosstalk)
+        assert b.pressure_kpa[footprint].astype(np.float32).sum() > 0.3 * pt.sum()
