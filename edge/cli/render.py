@@ -86,8 +86,8 @@ def people_arrays(record: dict, num_joints: int = 24):
         transls.append(transl)
         ids.append(person.get("track_id", k))
     width = max(len(b) for b in betas)
-    betas = np.stack([np.pad(b, (0, width - len(b))) for b in betas]) if width else None
-    return np.stack(poses), betas, np.stack(transls), ids
+    padded = np.stack([np.pad(b, (0, width - len(b))) for b in betas]) if width else None
+    return np.stack(poses), padded, np.stack(transls), ids
 
 
 def run(args) -> int:

@@ -154,6 +154,7 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None, require_sinks_s
     try:
         rt.start()
         sinks = ", ".join(redact(u) for u in cfg.sinks.urls)
+        assert rt.bundle is not None  # loaded by setup()
         print(f"cavatar run: {redact(cfg.source.url)} → {sinks}; model {rt.bundle.version}; status "
               f"{cfg.status_path()}{'' if cfg.runtime.seconds <= 0 else f'; stops after {cfg.runtime.seconds:g} s'}"
               f"; Ctrl-C stops{f' ({config_note})' if config_note else ''}", file=sys.stderr, flush=True)

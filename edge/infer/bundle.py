@@ -226,7 +226,8 @@ class ModelBundle:
     # -- properties ---------------------------------------------------------------------------
     @property
     def grid(self) -> tuple[int, int]:
-        return tuple(int(g) for g in self.manifest["grid"])
+        rows, cols = self.manifest["grid"]
+        return int(rows), int(cols)
 
     @property
     def pitch_m(self) -> float:

@@ -328,7 +328,7 @@ def _section(kind: type, raw: dict, name: str, problems: list[str]) -> Any:
         return None
 
 
-def _delegated(kind: type, raw: dict, path: str, problems: list[str]) -> Any:
+def _delegated(kind: Any, raw: dict, path: str, problems: list[str]) -> Any:
     """A section whose typed config lives in its own package: every key checked on its own, so every problem is named."""
     fields = {f.name for f in dataclasses.fields(kind)}
     _unknown(raw, fields, f"{path}.", problems)
@@ -391,9 +391,14 @@ def describe() -> list[Key]:
     """Every key of the configuration, in file order, with its type, default and description."""
     rows: list[Key] = []
 
-    def add(kind: type, prefix: str) -> None:
+    def add(kind: Any, prefix: str) -> None:
         for f in dataclasses.fields(kind):
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            if f.default is not dataclasses.MISSING:
+                default = f.default
+            elif f.default_factory is not dataclasses.MISSING:
+                default = f.default_factory()
+            else:
+                raise TypeError(f"{kind.__name__}.{f.name} has no default")
             if dataclasses.is_dataclass(default):
                 add(type(default), f"{prefix}.{f.name}")
                 continue

@@ -220,6 +220,7 @@ class Runtime:
         self._started_wall, self._started_mono = self.clock(), time.monotonic()
         self.board = BoardHealth(self.config.source.board_timeout_s, self._started_mono)
         self.state = "running"
+        assert self.publisher is not None  # made by setup()
         self.publisher.start()
         self.write_status()
         self.publisher.put_info(self.info())
@@ -283,6 +284,8 @@ class Runtime:
         from calibration.runtime import status_temperature_c
 
         src, stages, pub, events = self.source, self.stages, self.publisher, self.events
+        assert stages is not None and pub is not None and self.board is not None  # made by setup() and start()
+        assert self._started_mono is not None
         seconds = self.config.runtime.seconds
         deadline = self._started_mono + seconds if seconds > 0 else None
         last_status = None
@@ -345,6 +348,7 @@ class Runtime:
 
     def _reserve_seq(self, seq: int) -> bool:
         """True once ``seq`` is reserved on disk (edge.runtime.seq); a record whose seq is not is never published."""
+        assert self.seqs is not None  # set up before the pipeline thread starts
         try:
             self.seqs.reserve(seq)
             return True
@@ -364,6 +368,7 @@ class Runtime:
         Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
         self.notifier.watchdog()
         now = time.monotonic()
+        assert self.board is not None and self.publisher is not None  # made by setup() and start()
         if not self.board.due(now):
             return
         change = self.board.check(now, self._source_stats())
@@ -391,7 +396,7 @@ class Runtime:
                     health = s["board_health"] or {}
                     self.notifier.status(f"board lost: {health.get('reason')}" if health.get("connected") is False else
                                          f"{self._fps:.1f} fps, {s['people']} people, {s['publish']['published']} published")
-                if time.monotonic() >= next_info:
+                if time.monotonic() >= next_info and self.publisher is not None:
                     next_info += rt.info_s
                     self.publisher.put_info(self.info())
             except Exception as exc:  # a full disk must not stop the pipeline
@@ -437,12 +442,12 @@ class Runtime:
         src_queue = dict(st.get("source", {}))
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
-        work = {k: c.get(k, 0) for k in WORK_COUNTERS}
+        work: dict[str, Any] = {k: c.get(k, 0) for k in WORK_COUNTERS}
         work["tracks_open"] = self.stages.tracks_open if self.stages else 0
         work["saved"] = {"frames_without_inference": c.get("frames_empty", 0) + c.get("frames_unconfirmed", 0),
                          "encoder_runs": c.get("person_frames", 0) - c.get("encoder_runs", 0),
                          "head_runs": c.get("person_frames", 0) - c.get("head_runs", 0)}
-        publish = {k: c.get(k, 0) for k in PUBLISH_COUNTERS}
+        publish: dict[str, Any] = {k: c.get(k, 0) for k in PUBLISH_COUNTERS}
         publish["queued"] = self.publisher.queued() if self.publisher else 0
         publish["last_seq"] = self.publisher.last_seq if self.publisher else None
         uptime = time.monotonic() - self._started_mono if self._started_mono else 0.0

@@ -45,12 +45,12 @@ class TimedCarpetSource(CarpetSource):
         super().__init__(link, **kwargs)
         self.times = times
         self._decode_s = 0.0
-        self.decoder = _Timed(self.decoder, "feed", self, emits_frames=False)
+        self.decoder = _Timed(self.decoder, "feed", self, emits_frames=False)  # type: ignore[assignment]  # a timing proxy
 
     def _adopt_info(self, info: Any) -> None:
         super()._adopt_info(info)
         if self.assembler is not None and not isinstance(self.assembler, _Timed):
-            self.assembler = _Timed(self.assembler, "push", self, emits_frames=True)
+            self.assembler = _Timed(self.assembler, "push", self, emits_frames=True)  # type: ignore[assignment]
 
     def _handshake(self) -> None:
         super()._handshake()
