@@ -153,6 +153,24 @@ def corrupt(pressure_kpa, rng: np.random.Generator):
     return q.clamp(max=SATURATION_KPA)
 
 
+def training_input(pressure_kpa, rng: np.random.Generator, board: bool = False):
+    """(N,H,W) kPa of one track → the model's training input (torch, kPa) for that track's kind.
+
+    A true-pressure track goes through ``corrupt`` (TRAINING_INPUT). A board's-path track (already the
+    sensor model's counts through a calibration) is floored and clipped as the runtime does
+    (edge.infer.model_input) after one global gain ×U(0.92, 1.08), which spans more calibrations than a
+    dataset's few carpets while keeping every label exact."""
+    import torch
+
+    if not board:
+        return corrupt(pressure_kpa, rng)
+    from edge.infer.model_input import FLOOR_KPA
+
+    p = torch.as_tensor(pressure_kpa, dtype=torch.float32) * float(rng.uniform(0.92, 1.08))
+    p = torch.where(p < FLOOR_KPA, torch.zeros_like(p), p)
+    return p.clamp(max=SATURATION_KPA)
+
+
 def chunk_indices(length: int, start: int, frames: int) -> np.ndarray:
     """Frame indices of a chunk starting at ``start`` (may be negative: the runtime pads a new
     track's history with its first frame, and so do we)."""

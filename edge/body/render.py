@@ -68,7 +68,8 @@ def draw_view(ax, bodies, faces, view: str, joints=None, parents=None, floor_z: 
     ax.tick_params(labelsize=7)
 
 
-def render_png(path, bodies, faces, views=("front", "side"), title: str | None = None, joints=None, parents=None, floor_z=0.0, size_in=4.0, dpi=100):
+def render_png(path, bodies, faces, views=("front", "side"), title: str | None = None, joints=None, parents=None,
+               floor_z=0.0, size_in=4.0, dpi=100):
     """Draw bodies (list of (V,3) arrays in metres, carpet frame) to a PNG.
 
     faces: (F,3) shared by all bodies; joints: optional list of (J,3) drawn as a

@@ -95,8 +95,14 @@ def _provider(args):
 
 def preflight(args: argparse.Namespace, ask=input) -> None:
     """Destination, session folder, recordings, board — then the mass: CliError (one line) at the first problem."""
-    from calibration.preflight import PreflightError, ask_mass, check_board, check_destination, check_recordings, \
-        check_work_folder
+    from calibration.preflight import (
+        PreflightError,
+        ask_mass,
+        check_board,
+        check_destination,
+        check_recordings,
+        check_work_folder,
+    )
 
     try:
         check_destination(Path(args.out))

@@ -38,9 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from edge.runtime.doctor import FAIL, OK, WARN, as_json, diagnose, exit_code
-
     from edge.runtime.config_choice import choose_config
+    from edge.runtime.doctor import FAIL, OK, WARN, as_json, diagnose, exit_code
 
     choice = choose_config(args.config)
     findings = diagnose(choice.path, open_board=not args.no_open, config_reason=choice.reason)

@@ -20,7 +20,8 @@ from edge.cli import CliError, command_name
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(command_name(__name__), help="draw the bodies of a published record to PNG", description=__doc__.split("\n\n")[0])
+    p = subparsers.add_parser(command_name(__name__), help="draw the bodies of a published record to PNG",
+                              description=__doc__.split("\n\n")[0])
     p.add_argument("record", type=Path, help="a .json record or a .jsonl file of records")
     p.add_argument("--png", type=Path, required=True, help="output PNG path")
     p.add_argument("--index", type=int, default=None, help="which record of a JSON-lines file (default 0; -1 is the last)")

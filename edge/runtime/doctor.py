@@ -39,8 +39,19 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Mapping
 
-from edge.health import (FAIL, OK, SERVICE_USER, WARN, Board, CheckContext, Finding, not_yours, owner, user,
-                          writable_file)
+from edge.health import (
+    FAIL,
+    OK,
+    SERVICE_USER,
+    WARN,
+    Board,
+    CheckContext,
+    Finding,
+    not_yours,
+    owner,
+    user,
+    writable_file,
+)
 from edge.runtime.install_check import check_onnxruntime, check_python
 
 SCHEMA = "cavatar.doctor/1"
@@ -108,7 +119,8 @@ def load(config_path: str | Path | None, reason: str = "--config") -> tuple[Any,
 
 def check_source(cfg: Any, open_board: bool, ctx: CheckContext) -> tuple[Board | None, list[Finding]]:
     """The source scheme's own check, then the board: known from the URL, named by a running `cavatar run`, or asked."""
-    from edge.sources import SourceError, check_source as check_scheme
+    from edge.sources import SourceError
+    from edge.sources import check_source as check_scheme
     from edge.sources.probe import probe_board
     from edge.urls import redact
 
@@ -318,7 +330,8 @@ def check_model(cfg: Any, cal: Any, board: Board | None) -> list[Finding]:
 
 def check_sink(url: str, ctx: CheckContext) -> list[Finding]:
     """The sink scheme's own check (edge.sinks)."""
-    from edge.sinks import SinkError, check_sink as check_scheme
+    from edge.sinks import SinkError
+    from edge.sinks import check_sink as check_scheme
     from edge.urls import redact
 
     try:

@@ -31,12 +31,12 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
-from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
-from edge.runtime.errors import SetupError
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
+from edge.runtime.errors import SetupError
 from edge.runtime.publisher import Publisher
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
 
@@ -312,11 +312,11 @@ class Runtime:
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
+                        for callback in self.on_outcome:
+                            callback(out)
                     if events is not None:
                         for payload in events.frame(out, stages.scene_frame, frame.host_time_s):
                             pub.put_event(payload)
-                        for callback in self.on_outcome:
-                            callback(out)
                     if self._limit_reached() or (deadline is not None and time.monotonic() >= deadline):
                         self._stop.set()
                     if self._stop.is_set():

@@ -20,7 +20,9 @@ A floor *episode* starts where a body comes onto the floor; its *arrival* is jud
 from where the body then lies: the time since the last stance nearby (within fall_radius_m) ended, if
 that stance stood at least min_shift_m away (the load moved by about a body's height: sitting down, or
 a bag dropped or a pet lying down beside a standing person, moves it less) carrying at least
-1/max_load_ratio of the lying load — or if it was someone seated on a chair beside the carpet (a still,
+1/max_load_ratio of the lying load, or if the body crumpled where it stood (down within collapse_window_s,
+now lying at full length, collapse_min_length_m, and nobody still standing in it) — or if it was
+someone seated on a chair beside the carpet (a still,
 steady, light print for seated_s, at most 1/seated_load_ratio of the lying load: their weight arriving
 on the floor is a fall wherever it lands). ``fall`` is raised once the episode
 has lasted confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival
@@ -33,10 +35,12 @@ stopped).
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
+from cavatar_common.config import StrictConfig, at_least_zero, described
 
 EVENT_TYPES = ("fall", "person_down")
 EXERCISE_MOVE_M = 0.02  # a body moves when its centre shifts more than this between frames ...
@@ -49,14 +53,15 @@ STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this lon
 
 
 def _f(default, doc: str):
-    if isinstance(default, list):
-        return field(default_factory=lambda: list(default), metadata={"doc": doc})
-    return field(default=default, metadata={"doc": doc})
+    """A field of FallConfig: every number is a finite value ≥ 0."""
+    return described(default, doc, at_least_zero if isinstance(default, float) else None)
 
 
 @dataclass(frozen=True)
-class FallConfig:
+class FallConfig(StrictConfig):
     """Fall and person-down events: thresholds in physical units (docs/falls.md)."""
+
+    WHAT: ClassVar[str] = "events"
 
     enabled: bool = _f(True, "detect falls and people down and publish them as events")
     person_down_s: float = _f(30.0, "person_down is raised after someone who arrived on the floor like a fall has "
@@ -89,6 +94,12 @@ class FallConfig:
     fall_radius_m: float = _f(1.6, "the body on its feet must have stood within this of where the load now lies")
     min_shift_m: float = _f(0.45, "... and at least this far from it: the load moved by about a body's height "
                                   "(sitting down or a bag dropped beside someone moves it less)")
+    collapse_window_s: float = _f(1.0, "... or, nearer than min_shift_m, a collapse where they stood: the body landed within "
+                                       "this of the stance ending ...")
+    collapse_s: float = _f(4.0, "... having carried a standing load at most this before landing (a deliberate "
+                                "lie-down stays low, kneeling or sitting, for longer) ...")
+    collapse_min_length_m: float = _f(1.2, "... and lies at full length, pressure length at least this (sitting or "
+                                            "kneeling on the floor, or a bag or a pet beside someone's feet, is shorter)")
     max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this (lighter: the body was "
                                     "in the air)")
     seated_s: float = _f(1.5, "a still, light footprint held this long is someone seated on a chair beside the carpet "
@@ -101,14 +112,11 @@ class FallConfig:
                                 "model calls the pose)")
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, float) and not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"events.{f.name} must be a finite number ≥ 0, got {v!r}")
+        self.check_fields()  # types, and every number finite and ≥ 0
         if self.fall_window_s > self.down_window_s:
-            raise ValueError("events.fall_window_s must not exceed events.down_window_s")
+            raise ValueError("fall_window_s must not exceed down_window_s")
         if self.person_down_s < self.confirm_s:
-            raise ValueError("events.person_down_s must be at least events.confirm_s")
+            raise ValueError("person_down_s must be at least confirm_s")
 
 
 @dataclass
@@ -230,6 +238,7 @@ class FallDetector:
         self._episodes: list[_Episode] = []
         self._standing_since: dict[int, float] = {}
         self._born: dict[int, float] = {}  # when each present track first appeared
+        self._now = 0.0  # the time of the frame being stepped
         self.raised = {"fall": 0, "person_down": 0}
 
     # ------------------------------------------------------------------ per frame
@@ -265,6 +274,7 @@ class FallDetector:
         """The same from ready-made body features (tests and the score drive this directly)."""
         c = self.config
         events: list[dict] = []
+        self._now = t_s
         while self._feet and self._feet[0][0] < t_s - c.down_window_s:
             self._feet.popleft()
         seen: set[int] = set()
@@ -346,11 +356,28 @@ class FallDetector:
             end_t = run[0][0]
             if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
                 where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
-                return start_t - end_t if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m else None
+                if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m or self._collapsed(start_t, end_t, run, b):
+                    return start_t - end_t
+                return None
             if self._seated(run, b):  # feet under a chair: the whole weight came down onto the floor
+                return start_t - end_t
+            if self._collapsed(start_t, end_t, run, b):  # stood, then went down through a light kneel
                 return start_t - end_t
             # lighter than the body now lying and not seated: the body in the air, a hand: look further back
         return None
+
+    def _collapsed(self, start_t: float, end_t: float, run: list, b: BodyFeatures) -> bool:
+        """Someone who crumpled where they stood (knees giving way, then over to the side): the stance ``run``
+        (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
+        load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
+        reads light; a deliberate lie-down stays low for longer); ``b`` lies at full length and none of its
+        tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
+        c = self.config
+        if start_t - end_t > c.collapse_window_s or b.length_m < c.collapse_min_length_m:
+            return False
+        if any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
+            return False
+        return any(r[0] >= start_t - c.collapse_s and b.force_n <= c.max_load_ratio * r[2] for r in run)
 
     def _seated(self, run: list, b: BodyFeatures) -> bool:
         """Someone seated on a chair beside the carpet: a footprint held still and steady (within SEATED_STILL_M of

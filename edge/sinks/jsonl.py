@@ -44,9 +44,9 @@ import sys
 import threading
 import time
 from datetime import datetime, timezone
+from glob import escape as glob_escape
 from pathlib import Path
 from typing import Any, Mapping
-from glob import escape as glob_escape
 from urllib.parse import unquote
 
 from edge.health import OK, CheckContext, Finding, writable_file
@@ -142,7 +142,7 @@ class JsonlSink(Sink):
         assert self.path is not None
         try:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644)
-        except OSError as exc:
+        except OSError:
             if self.path.is_symlink():
                 raise SinkError(f"jsonl:// {str(self.path)!r} is a symbolic link: refused (a link could point at "
                                 "anyone's file); give the real path") from None

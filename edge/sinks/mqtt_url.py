@@ -81,7 +81,8 @@ class MqttConfig:
 
     def describe(self) -> str:
         user = f"{self.username}@" if self.username else ""
-        return f"mqtt://{user}{self.host}:{self.port}/{self.prefix} (qos {self.qos}{', tls' if self.tls else ''}{', spool' if self.spool else ''})"
+        extras = (", tls" if self.tls else "") + (", spool" if self.spool else "")
+        return f"mqtt://{user}{self.host}:{self.port}/{self.prefix} (qos {self.qos}{extras})"
 
 
 def parse(url: str) -> MqttConfig:

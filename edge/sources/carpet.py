@@ -207,7 +207,8 @@ class CarpetSource:
             try:
                 data = self._read(0.05)
             except LinkEnded:
-                raise SourceError(f"{self.link.describe()}: no INFO packet in the data; is it a capture written by `cavatar record`?") from None
+                raise SourceError(f"{self.link.describe()}: no INFO packet in the data; "
+                                  "is it a capture written by `cavatar record`?") from None
             for pkt in self.decoder.feed(data):
                 if info is None and isinstance(pkt, (codec.Info, codec.ForeignInfo)):
                     codec.check_compatible(pkt)
@@ -236,7 +237,8 @@ class CarpetSource:
                 f"speaks another protocol definition (ours: v{codec.PROTOCOL_VERSION}, 0x{codec.DEFINITION_HASH:04X}); "
                 "update the firmware or the host"
             )
-        return f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s (wrong baud rate or not a carpet board?)"
+        return (f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s "
+                "(wrong baud rate or not a carpet board?)")
 
     def _adopt_info(self, info: Any) -> None:
         """Adopt the first INFO; pin its board identity. A later INFO (mid-stream or after a replug) of

@@ -104,7 +104,8 @@ class SerialLink(Link):
             missing = not os.path.exists(self.port)
             if missing and not self._opened_once:
                 ports = ", ".join(available_ports()) or "none"
-                raise SourceError(f"serial port {self.port} does not exist. Ports found: {ports}. Run `cavatar devices` to see candidates.") from None
+                raise SourceError(f"serial port {self.port} does not exist. Ports found: {ports}. "
+                                  "Run `cavatar devices` to see candidates.") from None
             if not self._opened_once:
                 raise SourceError(f"cannot open serial port {self.port}: {exc}") from None
             raise LinkLost(str(exc)) from None

@@ -9,8 +9,8 @@ person) or ordinary activity. Pressure is the contact model's (sim.contact) plus
 (sim.objects), clean (no sensor model, no calibration: the path a perfect calibration gives); it goes
 through the runtime's own SceneTracker and :func:`edge.scene.falls.body_features`, so the detector
 sees what it sees on the board: the scene's observations per frame (track, load, area, centre and
-pressure moments; edge.scene.falls.observe), merged into bodies when the detector replays them. The model's activity is not used (the detector then works from
-pressure alone).
+pressure moments; edge.scene.falls.observe), merged into bodies when the detector replays them. The model's
+activity is not used (the detector then works from pressure alone).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def clip_list(seeds, ordinary_s: float = 30.0, falls: bool = True, negatives: bo
 
 def _people(clip: Clip, body, rng):
     """[(Track, load fraction (T,))], truth, seconds."""
-    from sim.motion import Subject, person_track, scene
+    from sim.motion import Subject, scene
     from sim.motion.falls import fall_track, on_carpet
 
     subject = Subject.random(100 + clip.seed, rng)
@@ -93,8 +93,11 @@ class BoardPath:
         from sim.live import live_sensor
 
         path = sim_calibration_path(Path(cal_dir), seed, GRID)
-        cal = Calibration.load(path) if path.exists() else run_sim_session(seed, GRID, 12, PITCH_M * 1e3, path)
-        self.sensor = live_sensor(seed, GRID)  # a fresh carpet of the same seed: its clock starts at 0
+        if path.exists():
+            cal = Calibration.load(path)
+        else:  # the session acts on its own sensor of that carpet; the clips get a fresh one
+            cal = run_sim_session(live_sensor(seed, GRID, 12, PITCH_M * 1e3), seed, path)
+        self.sensor = live_sensor(seed, GRID, 12, PITCH_M * 1e3)  # a fresh carpet of the same seed: clock at 0
         self.step = CalibratedFrames(cal)
 
     def __call__(self, pressure_kpa: np.ndarray, t_s: float):
@@ -163,7 +166,7 @@ def clip_features(clip: Clip, body, path: str = "board", cal_dir="out/falls") ->
 
 
 def main(argv=None) -> int:
-    """python -m export.score.falls_clips OUT.jsonl SEED [SEED …] [--ordinary-s S]: append clip features."""
+    """python -m export.score.falls_clips OUT.jsonl SEED [SEED …] [--ordinary-s S] [--what A,B]: append clip features."""
     import argparse
     import json
     from pathlib import Path
@@ -175,6 +178,7 @@ def main(argv=None) -> int:
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--ordinary-s", type=float, default=30.0)
     ap.add_argument("--only", choices=("falls", "negatives"))
+    ap.add_argument("--what", help="only these scenarios / activities, comma-separated (e.g. slow_collapse,lie_down)")
     ap.add_argument("--path", choices=("board", "clean"), default="board",
                     help="board: sensor model raw counts → calibration (default); clean: the contact model's pressure")
     ap.add_argument("--cal-dir", default="out/falls", help="where the virtual carpets' calibrations are kept")
@@ -185,6 +189,13 @@ def main(argv=None) -> int:
     if out.exists():
         done = {json.loads(line)["name"] for line in out.read_text().splitlines() if line.strip()}
     clips = clip_list(a.seeds, a.ordinary_s, falls=a.only != "negatives", negatives=a.only != "falls")
+    if a.what:
+        wanted = set(a.what.split(","))
+        unknown = wanted - {c.what for c in clip_list([0], a.ordinary_s)}
+        if unknown:
+            ap.error(f"--what: unknown {', '.join(sorted(unknown))}; accepted: scenario or activity names of the clip list "
+                     "(e.g. slow_collapse,lie_down,sitting,pet,bag)")
+        clips = [c for c in clips if c.what in wanted]
     for clip in clips:
         if clip.name in done:
             continue

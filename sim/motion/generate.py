@@ -12,7 +12,15 @@ from sim.motion.activities import ACTIVITIES, FEET, STANDING, mirror
 from sim.motion.keys import BASE, Timeline, contacts, pose
 from sim.motion.pace import Pacer
 from sim.motion.rig import (
-    CONTACT_PARTS, J, LF, RF, UPRIGHT, Rig, euler_deg_to_matrix, matrix_to_rotvec, rot_z,
+    CONTACT_PARTS,
+    LF,
+    RF,
+    UPRIGHT,
+    J,
+    Rig,
+    euler_deg_to_matrix,
+    matrix_to_rotvec,
+    rot_z,
 )
 
 DEFAULT_RATE_HZ = 14.0

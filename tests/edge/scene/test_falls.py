@@ -1,12 +1,12 @@
 """The fall detector on scripted per-frame body features: each fall kind and hard negative, its events."""
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
 
-from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
 from edge.runtime.events import EventStage
+from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
 
 RATE = 14.0
 FEET = dict(force_n=650.0, area_m2=0.035, length_m=0.55)
@@ -60,6 +60,51 @@ def test_fall_split_over_two_tracks_still_one_fall():
                      body([3], a + (0, 1.3), force_n=470, area_m2=0.07, length_m=0.6)])]
     ev, _ = run(script)
     assert [(k, s) for k, s, _, _ in ev] == [("fall", "raised")]
+
+
+KNEEL = dict(force_n=200.0, area_m2=0.016, length_m=0.55)  # knees and shins on the board's path read light
+LONG = dict(force_n=650.0, area_m2=0.085, length_m=1.6)  # lying on the side at full length
+
+
+def test_a_slow_collapse_where_they_stood_is_a_fall():
+    """The knees give way (a light, kneeling print), then over to the side: the load lies 0.3 m from the feet."""
+    a = np.array([0.9, 0.6])
+    script = [(3.0, [body([1], a, **FEET)]), (1.8, [body([1], a, **KNEEL)]), (0.1, []),
+              (34.0, [body([1, 2], a + (0.15, 0.25), **LONG)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < ev[0][2] - 4.9 <= 1.0
+
+
+@pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "still_standing"])
+def test_going_down_in_place_without_collapsing_is_no_fall(case):
+    """In place, but: low for longer before lying (a deliberate lie-down), the body sitting rather than at full
+    length, or the feet of someone still standing inside what lies there."""
+    a = np.array([0.9, 0.6])
+    lying = body([1, 2], a + (0.15, 0.25), **LONG)
+    if case == "kneel_long":
+        script = [(3.0, [body([1], a, **FEET)]), (5.0, [body([1], a, **KNEEL)]), (0.1, []), (34.0, [lying])]
+    elif case == "sit_first":
+        script = [(3.0, [body([1], a, **FEET)]), (1.5, [body([1], a + (0, 0.2), **SITTING)]), (34.0, [lying])]
+    elif case == "short":
+        script = [(3.0, [body([1], a, **FEET)]), (0.3, []), (34.0, [body([1, 2], a + (0.15, 0.25), **dict(LONG, length_m=1.1))])]
+    else:  # a bag beside the feet of someone who has stood there all along: a long print, no fall
+        def point(tid, force_n, area_m2, xy):  # an observation whose pressure sits at one point
+            x, y = xy
+            return Observation(tid, force_n, area_m2, np.asarray(xy, float),
+                               force_n * np.array([1.0, x, y, x * x, y * y, x * y]))
+
+        feet, bag = point(1, 650.0, 0.035, a), point(2, 300.0, 0.06, a + (0.8, 0.0))
+        # merged: 950 N on 0.095 m², 1.49 m long, its centre 0.25 m from the feet: in place, at full length
+        det, out, t = FallDetector(), [], 0.0
+        for k in range(int(40 * RATE)):
+            out += [e for e in det.step_observations(t, [feet] if k < 3 * RATE else [feet, bag], {})
+                    if e["state"] == "raised"]
+            t += 1 / RATE
+        assert out == []
+        return
+    ev, _ = run(script)
+    assert ev == []
 
 
 def test_lying_down_slowly_is_no_fall_and_no_person_down():
@@ -208,6 +253,18 @@ def test_config_refuses_bad_values():
         FallConfig(person_down_s=-1.0)
     with pytest.raises(ValueError, match="fall_window_s"):
         FallConfig(fall_window_s=9.0, down_window_s=6.0)
+    with pytest.raises(ValueError, match="confirm_s must be a number"):
+        FallConfig(confirm_s=float("nan"))
+    with pytest.raises(ValueError, match="enabled must be a boolean"):
+        FallConfig(enabled=1)
+
+
+def test_config_is_strict_and_described():
+    assert FallConfig.from_dict({"person_down_s": 20}).person_down_s == 20.0  # an integer taken for a number
+    with pytest.raises(ValueError, match="unknown events option.*person_down_secs"):
+        FallConfig.from_dict({"person_down_secs": 20.0})
+    docs = FallConfig.describe()
+    assert docs["person_down_s"].endswith("(default 30.0)") and len(docs) == len(fields(FallConfig))
 
 
 class _Clock:
