@@ -183,11 +183,6 @@ def main(argv=None) -> int:
                     help="board: sensor model raw counts → calibration (default); clean: the contact model's pressure")
     ap.add_argument("--cal-dir", default="out/falls", help="where the virtual carpets' calibrations are kept")
     a = ap.parse_args(argv)
-    body = BodyModel.load("lite")
-    out = Path(a.out)
-    done = set()
-    if out.exists():
-        done = {json.loads(line)["name"] for line in out.read_text().splitlines() if line.strip()}
     clips = clip_list(a.seeds, a.ordinary_s, falls=a.only != "negatives", negatives=a.only != "falls")
     if a.what:
         wanted = set(a.what.split(","))
@@ -196,6 +191,11 @@ def main(argv=None) -> int:
             ap.error(f"--what: unknown {', '.join(sorted(unknown))}; accepted: scenario or activity names of the clip list "
                      "(e.g. slow_collapse,lie_down,sitting,pet,bag)")
         clips = [c for c in clips if c.what in wanted]
+    body = BodyModel.load("lite")
+    out = Path(a.out)
+    done = set()
+    if out.exists():
+        done = {json.loads(line)["name"] for line in out.read_text().splitlines() if line.strip()}
     for clip in clips:
         if clip.name in done:
             continue

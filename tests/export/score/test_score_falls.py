@@ -58,3 +58,13 @@ def test_the_score_names_its_path_and_refuses_a_mixed_clip_file(tmp_path):
     mixed.write_text(board.read_text() + json.dumps(_clip("fall_backward-s5", "fall", 0.8, FALL, path="clean")) + "\n")
     with pytest.raises(SystemExit, match="several paths"):
         main(["--clips", str(mixed), "--out", str(tmp_path / "m")])
+
+
+def test_the_clip_simulator_refuses_an_unknown_scenario(tmp_path, capsys):
+    from export.score.falls_clips import clip_list, main as clips_main
+
+    with pytest.raises(SystemExit):
+        clips_main([str(tmp_path / "c.jsonl"), "0", "--what", "slow_collapse,slow_colapse"])
+    assert "unknown slow_colapse" in capsys.readouterr().err and not (tmp_path / "c.jsonl").exists()
+    names = {c.what for c in clip_list([0])}
+    assert {"slow_collapse", "lie_down_hand_first", "sitting", "pet", "bag"} <= names
