@@ -50,15 +50,15 @@ test: test-deps
 # speed against error: errors on `make model`'s unseen subjects when its datasets are there, speed only otherwise
 MODEL_DATA ?= $(HOME)/.cache/cavatar-model/data
 bench: test-deps
-	$(PY) bench/decoder_throughput.py
-	$(PY) bench/body_model.py
-	$(PY) bench/sim_sensor.py
-	$(PY) bench/sim_contact.py
-	$(PY) bench/scene_pipeline.py
-	$(PY) bench/calibration_runtime.py
-	$(PY) bench/runtime_latency.py
-	$(PY) bench/speed_error.py $(foreach d,many48 train100k,$(if $(wildcard $(MODEL_DATA)/$(d)/manifest.json),--data $(MODEL_DATA)/$(d)))
-	$(PY) bench/readme_perf.py
+	$(PY) -m bench.decoder_throughput
+	$(PY) -m bench.body_model
+	$(PY) -m bench.sim_sensor
+	$(PY) -m bench.sim_contact
+	$(PY) -m bench.scene_pipeline
+	$(PY) -m bench.calibration_runtime
+	$(PY) -m bench.runtime_latency
+	$(PY) -m bench.speed_error $(foreach d,many48 train100k,$(if $(wildcard $(MODEL_DATA)/$(d)/manifest.json),--data $(MODEL_DATA)/$(d)))
+	$(PY) -m bench.readme_perf
 
 # What the board publishes, scored against the virtual carpet's truth (issue 12): the standard scene set
 # through `cavatar run`'s own runtime → bench/results/score.json, docs/score/score.{md,png}, README's accuracy block.

@@ -1,7 +1,7 @@
 """Per-frame cost of the body model: numpy joints-only and full mesh at batch 1 and 40,
 one BLAS thread, and the torch twin for comparison. Writes bench/results/body_model.json.
 
-    OMP_NUM_THREADS=1 python bench/body_model.py
+    OMP_NUM_THREADS=1 python -m bench.body_model
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def main() -> int:
         torch_version = None
     out = {
         "benchmark": "body_model",
-        "command": "OMP_NUM_THREADS=1 python bench/body_model.py",
+        "command": "OMP_NUM_THREADS=1 python -m bench.body_model",
         "machine": {
             "platform": platform.platform(), "processor": platform.processor() or platform.machine(),
             "cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__, "torch": torch_version,

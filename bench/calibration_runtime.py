@@ -5,7 +5,7 @@ Frames: two people walking (``sim.footsteps``) through a randomised simulated ca
 14 Hz (generated before timing). Each call is timed alone, so p99 shows the once-a-second
 baseline update. Issue 5's goal: calibrate + filter + segment + track ≤ 3 ms per frame.
 
-Usage: python bench/calibration_runtime.py  → bench/results/calibration_runtime.json
+Usage: python -m bench.calibration_runtime  → bench/results/calibration_runtime.json
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
@@ -22,7 +21,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench import machine  # noqa: E402
 from calibration import Applier  # noqa: E402
 from calibration.from_truth import calibration_from_truth  # noqa: E402
@@ -138,7 +136,7 @@ def main(repeats: int = 5) -> None:
         "goal": f"calibrate + filter + segment + track ≤ {GOAL_MS} ms per 96×96 frame on one core (issue 5)",
         "frames": "30 s of two people walking (sim.footsteps) on CarpetSensor.random(0), 14 Hz, generated before timing; "
                   "each call timed alone; 5 repeats, each statistic the lowest over the repeats (a shared machine)",
-        "command": "python bench/calibration_runtime.py", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "command": "python -m bench.calibration_runtime", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "machine": {"platform": platform.platform(), "cpu_model": machine.cpu_model(), "cpu_count": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "threads": 1,
                     "load_average": os.getloadavg()},

@@ -5,8 +5,8 @@ second; 96×96 samples near mid-scale with noise, 14 Hz — is encoded once per 
 (packed12, u8, u16) and fed to a fresh ``StreamDecoder`` in fixed-size reads (4096 bytes
 by default, what a serial or USB read typically returns), timed over several runs.
 
-    python bench/decoder_throughput.py                 # writes bench/results/decoder_throughput.json
-    python bench/decoder_throughput.py --profile       # and prints where the time goes (cProfile)
+    python -m bench.decoder_throughput                 # writes bench/results/decoder_throughput.json
+    python -m bench.decoder_throughput --profile       # and prints where the time goes (cProfile)
 
 "× real time" = the stream's duration at 14 Hz / the CPU time this thread spent decoding it
 (``time.thread_time``: the decoder is single-threaded, so this is one core's work, and time
@@ -32,7 +32,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from firmware_protocol import codec  # noqa: E402
 

@@ -1,6 +1,6 @@
 """The fall detector's cost in the runtime, side by side: the per-frame pipeline with and without events.
 
-    OMP_NUM_THREADS=1 python bench/falls_events.py [--frames 420]
+    OMP_NUM_THREADS=1 python -m bench.falls_events [--frames 420]
 
 Frames as in bench/runtime_latency.py (``sim://?people=1&seed=7`` recorded once through the real
 protocol, decoded by the runtime's timed reader, then FrameStages on one thread with the shipped
@@ -27,7 +27,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from bench import machine  # noqa: E402
 from bench.runtime_latency import SEED, FrameClock, decode, record, stats  # noqa: E402
@@ -94,7 +93,7 @@ def main() -> int:
         rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, timeout=10).stdout.strip()
     except OSError:
         rev = None
-    out = {"benchmark": "falls_events", "command": "OMP_NUM_THREADS=1 python bench/falls_events.py"
+    out = {"benchmark": "falls_events", "command": "OMP_NUM_THREADS=1 python -m bench.falls_events"
            + ("" if a.frames == 420 else f" --frames {a.frames}"), "git_revision": rev,
            "machine": {**machine.describe(), "omp_num_threads": os.environ.get("OMP_NUM_THREADS")},
            "method": __doc__.split("\n\n", 2)[2].strip().replace("\n", " "),

@@ -2,7 +2,7 @@
 (and, with --paper, the paper-size architecture with random weights for comparison).
 Writes bench/results/model_latency.json.
 
-    python bench/model_latency.py --checkpoint RUN/best.pt --bundle edge/models/lean-96 [--paper]
+    python -m bench.model_latency --checkpoint RUN/best.pt --bundle edge/models/lean-96 [--paper]
 
 Per published frame the runtime runs the encoder once (batch 1, the new frame) and the head once
 (batch 1, the 40-frame window), so "per_frame_ms" = encoder + head. onnxruntime sessions as on the
@@ -24,8 +24,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(var, "1")
 
 import numpy as np  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from export.quantize import session  # noqa: E402
 

@@ -2,7 +2,7 @@
 decode, calibrate, scene, encoder, head, record, publish, and the frame total against the
 71.4 ms frame interval at 14 Hz. Writes bench/results/runtime_latency.json.
 
-    OMP_NUM_THREADS=1 python bench/runtime_latency.py [--bundle DIR] [--frames 420]
+    OMP_NUM_THREADS=1 python -m bench.runtime_latency [--bundle DIR] [--frames 420]
 
 Frames come from recordings, so the simulator's cost is not measured: ``sim://?people=P&seed=7``
 (P = 1 and 2) is recorded once into a capture file through the real protocol (as `cavatar
@@ -40,7 +40,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from bench import machine  # noqa: E402
 
@@ -202,7 +201,7 @@ def main() -> int:
     one = results[0]
     out = {
         "benchmark": "runtime_latency",
-        "command": "OMP_NUM_THREADS=1 python bench/runtime_latency.py"
+        "command": "OMP_NUM_THREADS=1 python -m bench.runtime_latency"
                    + ("" if args.bundle.resolve() == default_bundle_path().resolve() else f" --bundle {args.bundle}")
                    + ("" if args.frames == 420 else f" --frames {args.frames}"),
         "git_revision": rev,

@@ -1,7 +1,7 @@
 """Soak of the runtime: many frames as fast as the pipeline takes them, memory and queues watched.
 Writes bench/results/runtime_soak.json.
 
-    OMP_NUM_THREADS=1 python bench/runtime_soak.py [--frames 50000]
+    OMP_NUM_THREADS=1 python -m bench.runtime_soak [--frames 50000]
 
 The in-process :class:`edge.runtime.Runtime` (pipeline thread, publisher thread, monitor
 writing the status file every second) runs on frames of the virtual carpet
@@ -36,7 +36,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(var, "1")
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from edge.frames import RawFrame  # noqa: E402
 from edge.runtime.reader import TimedCarpetSource  # noqa: E402
@@ -172,7 +171,7 @@ def main() -> int:
         rev = None
     result = {
         "benchmark": "runtime_soak",
-        "command": "OMP_NUM_THREADS=1 python bench/runtime_soak.py"
+        "command": "OMP_NUM_THREADS=1 python -m bench.runtime_soak"
                    + ("" if args.frames == 50_000 else f" --frames {args.frames}"),
         "git_revision": rev,
         "machine": machine.describe(),

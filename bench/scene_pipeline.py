@@ -3,7 +3,7 @@ on 96×96 frames, one thread, for empty, 1-, 2- and 3-person scenes, and trackin
 (identity switches, missed people) on simulated 2- and 3-person walks.
 Writes bench/results/scene_pipeline.json.
 
-    OMP_NUM_THREADS=1 python bench/scene_pipeline.py
+    OMP_NUM_THREADS=1 python -m bench.scene_pipeline
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
         totals[f"{k}_people"]["missed_fraction"] = round(totals[f"{k}_people"]["missed"] / totals[f"{k}_people"]["true_people"], 4)
     out = {
         "benchmark": "scene_pipeline",
-        "command": "OMP_NUM_THREADS=1 python bench/scene_pipeline.py",
+        "command": "OMP_NUM_THREADS=1 python -m bench.scene_pipeline",
         "machine": {"platform": platform.platform(), "processor": platform.processor(), "cpus": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
                     "blas_threads": os.environ.get("OMP_NUM_THREADS"), "load_average_1_5_15_at_end": None},

@@ -1,7 +1,7 @@
 """People segmentation and tracking quality of the scene step on the board's path, against the
 simulator's per-person truth. Writes bench/results/scene_quality.json.
 
-    OMP_NUM_THREADS=1 python bench/scene_quality.py [--quick] [--cache DIR]
+    OMP_NUM_THREADS=1 python -m bench.scene_quality [--quick] [--cache DIR]
 
 Scenes: every activity alone (6 s each, two seeds), 2 and 3 people doing upright activities side by
 side (8 s each), placed by the simulator (``sim.dataset.generate.place_scene``), and 30 s of
@@ -40,8 +40,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 from scipy.optimize import linear_sum_assignment  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from machine import describe  # noqa: E402
+from bench.machine import describe  # noqa: E402
 
 RATE_HZ = 14.0
 FLOOR_KPA = 0.2
@@ -224,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
     by_people = {f"{k}_people": summarise([r for r in all_rows if r["true"] == k]) for k in (1, 2, 3)}
     alone = [r for r in all_rows if r["true"] == 1]
     by_activity = {a: summarise([r for r in alone if r["activity"] == a]) for a in sorted({r["activity"] for r in alone})}
-    command = " ".join(["OMP_NUM_THREADS=1 python bench/scene_quality.py", *(sys.argv[1:] if argv is None else argv)])
+    command = " ".join(["OMP_NUM_THREADS=1 python -m bench.scene_quality", *(sys.argv[1:] if argv is None else argv)])
     out = {"benchmark": "scene_quality", "command": command,
            "machine": describe(), "method": __doc__.split("\n\n", 2)[2].strip(),
            "by_people": by_people, "alone_by_activity": by_activity, "scenes": scenes,

@@ -2,7 +2,7 @@
 way with and without it, what that does to MPJPE, and what it costs per person-frame.
 Writes bench/results/score_heading.json.
 
-    python bench/score_heading.py --data DATASET [--data …] [--split all] [--bundle edge/models/lean-96]
+    python -m bench.score_heading --data DATASET [--data …] [--split all] [--bundle edge/models/lean-96]
 
 Inputs as `cavatar eval` builds them (the simulator's pressure through the training corruption); the
 model runs on every frame of every track and the resolver sees every frame, as on the board. The cost
@@ -23,8 +23,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(var, "1")
 
 import numpy as np  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.machine import describe  # noqa: E402
 
@@ -97,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     result = run(args.data, args.split, args.bundle, args.heading_params)
     result["machine"] = describe()
-    result["command"] = "python bench/score_heading.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    result["command"] = "python -m bench.score_heading " + " ".join(argv if argv is not None else sys.argv[1:])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")

@@ -1,4 +1,4 @@
-"""Cost of the contact model per person-frame: ``python bench/sim_contact.py [--out FILE]`` (default bench/results/sim_contact.json).
+"""Cost of the contact model per person-frame: ``python -m bench.sim_contact [--out FILE]`` (default bench/results/sim_contact.json).
 
 Times ``ContactModel.pressure_kpa`` (96×96, defaults) on every scene pose at 8 random
 places and headings, for the lite and full meshes, with the COM computed inside (the
@@ -19,8 +19,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 
 def main(argv=None) -> int:
     from edge.body import BodyModel
@@ -28,13 +26,13 @@ def main(argv=None) -> int:
     from sim.contact.model import ContactModel
     from sim.contact.scenes import SCENE_POSES, grounded_vertices, scene_pose
 
-    parser = argparse.ArgumentParser(prog="python bench/sim_contact.py")
+    parser = argparse.ArgumentParser(prog="python -m bench.sim_contact")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results" / "sim_contact.json")
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
     carpet = ContactModel(96, 96, 0.01905)
     rng = np.random.default_rng(0)
-    results = {"benchmark": "sim_contact", "command": "python bench/sim_contact.py",
+    results = {"benchmark": "sim_contact", "command": "python -m bench.sim_contact",
                "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": {"platform": platform.platform(),
                "cpu_count": os.cpu_count(), "load_average": os.getloadavg()},
                "carpet": repr(carpet), "threads": os.environ.get("OMP_NUM_THREADS"), "python": platform.python_version(),

@@ -1,7 +1,7 @@
 """Dataset generation speed: frames per second on this machine, and the projected time
 of a training-size dataset (≥ 100,000 frames, ≥ 12 subjects; goal ≤ 20 min on 2 cores).
 
-Usage: python bench/sim_generate.py [--subjects 12] [--seconds-per-activity 3] [--workers 2]
+Usage: python -m bench.sim_generate [--subjects 12] [--seconds-per-activity 3] [--workers 2]
 → bench/results/sim_generate.json. The dataset is written to a temporary folder and removed.
 """
 
@@ -16,8 +16,6 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def main() -> None:
@@ -47,7 +45,7 @@ def main() -> None:
     fps = frames / elapsed
     out = {
         "benchmark": "sim_generate", "goal": "100,000 frames, 12 subjects, in <= 20 min on 2 cores",
-        "command": "python bench/sim_generate.py " + " ".join(sys.argv[1:]), "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "command": "python -m bench.sim_generate " + " ".join(sys.argv[1:]), "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "machine": {"platform": platform.platform(), "cpu_count": os.cpu_count(), "python": platform.python_version(),
                     "load_average_at_end": os.getloadavg()},
         "settings": vars(args), "frames": frames, "skipped_scenes": skipped, "elapsed_s": round(elapsed, 1), "frames_per_s": round(fps, 1),

@@ -1,6 +1,6 @@
 """Sensor-model cost per 96×96 frame on one core (goal ≤ 2 ms), with and without faults and ghosting.
 
-Usage: python bench/sim_sensor.py  → bench/results/sim_sensor.json
+Usage: python -m bench.sim_sensor  → bench/results/sim_sensor.json
 """
 
 from __future__ import annotations
@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
@@ -17,7 +16,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench import machine  # noqa: E402
 from sim.sensor import CarpetSensor  # noqa: E402
 
@@ -47,7 +45,7 @@ def main() -> None:
     results = {name: time_frames(s) for name, s in cases.items()}
     out = {
         "benchmark": "sim_sensor", "goal_ms_per_frame": 2.0, "grid": "96x96",
-        "command": "python bench/sim_sensor.py", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "command": "python -m bench.sim_sensor", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "machine": {"platform": platform.platform(), "cpu_model": machine.cpu_model(), "cpu_count": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "load_average": os.getloadavg()},
         "results": results,

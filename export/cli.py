@@ -109,7 +109,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="int8 (default; must pass the int8 gate on the held-out frames) or fp32")
     f.set_defaults(func=run_finetune)
 
-    from export.benchmark import add_arguments as bench_arguments  # numpy only at import: torch comes with the run
+    from bench.speed_error_run import add_arguments as bench_arguments  # numpy only at import: torch comes with the run
 
     k = sub.add_parser("bench", help="speed against error of every model variant, and the measured ratios (needs the export extra)",
                        description="Per-frame latency (median, p99), frames/s, peak memory and size of every model variant "
@@ -282,7 +282,8 @@ def run_bench(args: argparse.Namespace) -> int:
     with _export_extra("benchmarking"):
         import torch  # noqa: F401
 
-        from export.benchmark import BenchmarkError, run_from_args, summary
+        from bench import BenchmarkError
+        from bench.speed_error_run import run_from_args, summary
     try:
         result = run_from_args(args, prog="cavatar bench")
     except BenchmarkError as exc:

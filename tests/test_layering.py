@@ -12,7 +12,8 @@ specific rule for a module applies):
   plug-in (entry points). Inside edge, ``edge.cli`` is the top: nothing else in edge imports it;
   ``edge.body`` imports nothing else of edge, since sim may import it;
 - ``sim``: numpy, scipy, edge.body (+ cavatar_common);
-- ``export``: torch (onnx, anny for the body model) and everything above.
+- ``export``: torch (onnx, anny for the body model) and everything above; ``export.cli`` also imports
+  ``bench`` (`cavatar bench` runs bench.speed_error_run; bench may import everything).
 
 Optional extras (matplotlib, h5py, joblib) may be imported only inside functions, so that a package
 imports without them. A private name (``_x``) is never imported across top-level packages, and no
@@ -53,6 +54,7 @@ RULES: dict[str, Rule] = {
     "edge.body": Rule(("edge.body", "numpy", "scipy", "cavatar_common")),
     "sim": Rule(("sim", "numpy", "scipy", "edge.body", "cavatar_common")),
     "export": Rule(("export", "torch", "onnx", "onnxscript", "anny", "sim", "edge", *_EDGE_DEPS)),
+    "export.cli": Rule(("export", "bench", "torch", "onnx", "onnxscript", "anny", "sim", "edge", *_EDGE_DEPS)),
 }
 
 

@@ -4,22 +4,20 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "bench"))
+from bench import readme_perf
 
-import readme_perf  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_readme_block_equals_the_generator_output():
     text = (ROOT / "README.md").read_text()
     assert readme_perf.BEGIN in text and readme_perf.END in text and "## Performance" in text
     assert readme_perf.current_block(text) == readme_perf.render(ROOT / "bench" / "results"), \
-        "README.md's Performance block is stale: run `python bench/readme_perf.py`"
+        "README.md's Performance block is stale: run `python -m bench.readme_perf`"
 
 
 def test_missing_optional_results_are_named_not_fatal(tmp_path):

@@ -1,4 +1,4 @@
-"""export/benchmark.py (`cavatar bench`, bench/speed_error.py) on a tiny bundle with a handful of frames: every field
+"""bench.speed_error (`cavatar bench`, python -m bench.speed_error) on a tiny bundle with a handful of frames: every field
 of the results, finite positive ratios, the Pareto front, the table and the plot; a bundle without weights.npz."""
 
 from __future__ import annotations
@@ -11,15 +11,11 @@ import pytest
 torch = pytest.importorskip("torch")
 pytest.importorskip("onnxscript")
 
-from export.benchmark import (  # noqa: E402
-    BenchmarkError,
-    SpeedErrorConfig,
-    bundle_variants,
-    markdown,
-    pareto_front,
-    run_speed_error,
-    write_outputs,
-)
+from bench import BenchmarkError  # noqa: E402
+from bench.speed_error_report import markdown, write_outputs  # noqa: E402
+from bench.speed_error_run import SpeedErrorConfig, run_speed_error  # noqa: E402
+from bench.stats import pareto_front  # noqa: E402
+from bench.variants import bundle_variants  # noqa: E402
 
 TOP = {"schema", "benchmark", "command", "date", "git_revision", "machine", "method", "evaluation", "variants", "pareto_front",
        "ratios", "elapsed_s"}
@@ -117,7 +113,7 @@ def test_cavatar_bench_refuses_clearly(bundle_without_weights, tiny_data, tmp_pa
 
 
 def test_the_runtime_against_the_interval_comes_from_runtime_latency_json_when_present(tmp_path):
-    from export.benchmark import runtime_vs_interval
+    from bench.simulated_day import runtime_vs_interval
 
     path = tmp_path / "runtime_latency.json"
     path.write_text(json.dumps({"command": "python bench/runtime_latency.py", "results": [
