@@ -42,9 +42,10 @@ $(VENV)/.viz: $(VENV)/.runtime
 run: venv $(VENV)/.viz
 	$(PY) -m edge.cli.demo --out out/run --seconds 20 --people 2 --seed 7
 
-# Lint (ruff: pyproject.toml [tool.ruff]) before the suite.
+# Lint (ruff: pyproject.toml [tool.ruff]) and type-check edge/ (mypy: [tool.mypy]) before the suite.
 test: test-deps
 	$(PY) -m ruff check .
+	$(PY) -m mypy
 	$(PY) -m pytest -q
 
 # speed against error: errors on `make model`'s unseen subjects when its datasets are there, speed only otherwise

@@ -72,7 +72,8 @@ def _packet_class(pdef: _spec.PacketDef) -> type:
     return cls
 
 
-PACKET_CLASSES: dict[str, type] = {p.name: _packet_class(p) for p in SPEC.packets}
+# Any: the classes are made from the spec at import, so their fields are known at run time only.
+PACKET_CLASSES: dict[str, Any] = {p.name: _packet_class(p) for p in SPEC.packets}
 _BY_ID: dict[int, type] = {cls.TYPE: cls for cls in PACKET_CLASSES.values()}
 _SEED: dict[int, int] = {cls.TYPE: SPEC.seed_for(cls.DEF) for cls in PACKET_CLASSES.values()}  # CRC seed by id
 

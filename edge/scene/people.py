@@ -279,12 +279,13 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
     if body.weight_n is None or len(centres_m) < 2:
         return None
     total = float(forces_n.sum())
-    excess = total - body.weight_n
-    if excess < max(min_person_force_n, HEAVY_FRACTION * body.weight_n):
+    weight_n = body.weight_n
+    excess = total - weight_n
+    if excess < max(min_person_force_n, HEAVY_FRACTION * weight_n):
         return None
 
     def fits(f: float) -> bool:  # carries the excess, and took no weight from the body (a back put down does)
-        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= max(min_person_force_n, KEEP_FRACTION * body.weight_n)
+        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= max(min_person_force_n, KEEP_FRACTION * weight_n)
 
     idx = np.flatnonzero(recent)
     parts = []

@@ -122,11 +122,13 @@ class SceneTracker:
         self._last_t_s = t_s
         c["valid"] += 1
         t1 = time.perf_counter()
+        assert p is not None  # check_frame gives the frame whenever it gives no reason
         p = self.filters.fill(p, bad)
         self._update_noise(p, bad, t_s)
         start, grow = self.thresholds_kpa()
         pre, filtered = self.filters(p, t_s, float(np.min(grow)))
         t2 = time.perf_counter()
+        blobs: list
         if filtered is None:
             labels, blobs = None, []
         else:
@@ -155,6 +157,7 @@ class SceneTracker:
             self.people.step([], [], t_s)
             self._prev_keys = self._prev_join = None
             return []
+        assert labels is not None and filtered is not None  # contacts come only from a filtered frame
         centres = np.array([b.cop_m for b in blobs])
         forces = np.array([b.force_n for b in blobs])
         priors = prior_keys(labels, len(blobs), self._prev_keys)
@@ -225,7 +228,7 @@ class SceneTracker:
     def _joined_s(self, labels: np.ndarray, priors: np.ndarray, t_s: float) -> np.ndarray:
         """(n_blobs,) when each blob's contact joined the track it had last frame (its prior); t_s for new ones."""
         n = len(priors)
-        if self._prev_join is None or not priors.any():
+        if self._prev_keys is None or self._prev_join is None or not priors.any():  # set together
             return np.full(n, t_s)
         same = (labels > 0) & (self._prev_keys == np.concatenate([[0], priors])[labels]) & (self._prev_keys > 0)
         if not same.any():

@@ -126,13 +126,13 @@ class PeopleTracker:
         for k, tr in self.tracks.items():
             if k not in bound:
                 tr.contact_force_n = None
-        for i, o in enumerate(observations):
-            tr = result[i]
-            if tr is None:
-                if o.force_n >= cfg.min_person_force_n:
-                    result[i] = self._birth(o, t_s)
+        for i, obs in enumerate(observations):
+            found = result[i]
+            if found is None:
+                if obs.force_n >= cfg.min_person_force_n:
+                    result[i] = self._birth(obs, t_s)
                 continue
-            self._update(tr, o, t_s)
+            self._update(found, obs, t_s)
         for k in [k for k in self.tracks if k not in bound and self.tracks[k].last_seen_t_s < t_s]:
             tr = self.tracks[k]
             if tr.track_id is None:

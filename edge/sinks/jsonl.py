@@ -323,7 +323,9 @@ class JsonlSink(Sink):
                     sys.stdout.write(data.decode())
                     sys.stdout.flush()
                 return
-            fd = os.open(self.events_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+            events_path = self.events_path
+            assert events_path is not None  # self.path is set
+            fd = os.open(events_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
             try:
                 os.write(fd, data)  # one short line: a single append
                 os.fsync(fd)

@@ -256,7 +256,7 @@ class MqttSink(Sink):
         with self._acks:
             left = list(self._pending.values())
             self._pending.clear()
-        unacked = [p.payload for p in left if p.kind == "bodies" and p.qos > 0]
+        unacked = [p.payload for p in left if p.kind == "bodies" and p.qos > 0 and p.payload is not None]
         lost = sum(1 for p in left if p.kind == "bodies" and p.qos == 0)
         if self._spool is not None:
             self._spool.prepend(unacked)  # sent first by the next run
@@ -332,6 +332,7 @@ class MqttSink(Sink):
     def _to_spool(self, line: str) -> None:
         """Under self._route."""
         self._spooling = True
+        assert self._spool is not None  # called only with a spool
         self._spool.append(line)  # a refusal is counted in spool.dropped
         self.counters.add("spooled_total")
         self._wake.set()

@@ -194,6 +194,7 @@ class Spool:
                     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND | os.O_NOFOLLOW, 0o600)
                     self._open, self._fd = Segment(self._next, path, 0, 0), fd
                     self._next += 1
+                assert self._fd is not None  # opened with self._open
                 _write_all(self._fd, data)
             except OSError as exc:  # a full disk: no half line stays behind, the record is counted
                 self._cut_back()
@@ -239,6 +240,7 @@ class Spool:
         if self._open is None:
             return False
         fd, seg = self._fd, self._open
+        assert fd is not None  # opened with self._open
         self._sealed.append(seg)
         self._open, self._fd = None, None
         try:

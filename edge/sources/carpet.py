@@ -167,7 +167,7 @@ class CarpetSource:
 
     def stats(self) -> dict[str, Any]:
         """Counters of every stage: decoder drops, assembly, link events, queue."""
-        out = {"decoder": self.decoder.stats.as_dict(), "source": dict(self.counters)}
+        out: dict[str, Any] = {"decoder": self.decoder.stats.as_dict(), "source": dict(self.counters)}
         if self.assembler is not None:
             out["frames"] = dict(self.assembler.counters)
         out["board_mismatch"] = self.board_mismatch
@@ -250,6 +250,7 @@ class CarpetSource:
             return
         diffs = [f"{key} {theirs!r} (was {ours!r})" for key, ours, theirs in
                  ((key, getattr(self.info, key), getattr(info, key)) for key in IDENTITY) if ours != theirs]
+        assert self.assembler is not None  # made with the first INFO
         self.assembler.reset()
         if diffs:
             self.counters["board_mismatch"] += 1
@@ -321,6 +322,7 @@ class CarpetSource:
             self.counters["packets_board_mismatch"] += 1
             return False
         t0 = time.perf_counter()
+        assert self.assembler is not None  # the handshake adopted an INFO before any frame packet
         frames = self.assembler.push(pkt)
         self._decode_s += time.perf_counter() - t0
         if frames:

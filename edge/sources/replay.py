@@ -8,6 +8,7 @@ slashes: ``replay:///var/lib/cavatar/capture.bin``.
 from __future__ import annotations
 
 import os
+from typing import BinaryIO
 
 from edge.health import FAIL, OK, CheckContext, Finding, owner, user
 from edge.sources.base import Link, LinkEnded, LinkLost, Option, SourceError, parse_url
@@ -26,7 +27,8 @@ class ReplayLink(Link):
 
     def __init__(self, path: str, chunk_bytes: int = 1 << 14) -> None:
         self.path, self.chunk_bytes = path, chunk_bytes
-        self._fh = None
+        self.speed = 1.0  # the URL's speed, set by open_link
+        self._fh: BinaryIO | None = None
 
     def describe(self) -> str:
         return f"replay://{self.path}"

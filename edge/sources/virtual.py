@@ -33,7 +33,7 @@ class VirtualCarpetLink(Link):
         self.speed = opts.get("speed", 1.0)
         self.paced = self.speed > 0
         self.rate_hz = 0.0
-        self.board = None
+        self.board: Any = None  # firmware_protocol's VirtualBoard, made by open()
         self._t0 = 0.0
         self._virtual_now = 0.0
 
@@ -122,5 +122,5 @@ class VirtualScheme:
     def open_link(self, url: str, **_: Any) -> VirtualCarpetLink:
         return open_link(url, self.plugin)
 
-    def check(self, url: str, ctx: CheckContext) -> tuple[Finding, Board]:
+    def check(self, url: str, ctx: CheckContext) -> tuple[Finding, Board | None]:
         return check(url, self.plugin, ctx)
