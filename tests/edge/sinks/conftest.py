@@ -6,14 +6,8 @@ subscriber sessions survive a broker restart). Nothing here is skipped: without
 mosquitto the fixture fails and says how to get it.
 """
 
-import sys
-from pathlib import Path
-
 import pytest
-
-sys.path.insert(0, str(Path(__file__).parent))
-
-from sink_helpers import Subscriber, body_record, brokers  # noqa: E402
+from sink_helpers import Subscriber, body_record, brokers
 
 
 @pytest.fixture
