@@ -5,17 +5,12 @@ hashes, dates and compares it, so it needs no simulated carpet. The broker is th
 own (tests/edge/sinks/sink_helpers.py), imported, not copied.
 """
 
-import sys
 from pathlib import Path
 
 import pytest
+from deploy_helpers import make_calibration, write_config
 
-sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parent.parent / "sinks"))  # sink_helpers: Broker, free_port
-sys.path.insert(0, str(Path(__file__).parent.parent))  # test_edge_without_torch: BLOCK_TORCH
-
-from deploy_helpers import make_calibration, write_config  # noqa: E402
-from sink_helpers import brokers  # noqa: E402
+from tests.edge.sinks.sink_helpers import brokers
 
 
 @pytest.fixture

@@ -193,7 +193,7 @@ def test_a_usb_board_is_found_and_probed_through_pyusb(config):
 
 
 def test_an_unreachable_broker_fails(capsys, config, tmp_path):
-    from sink_helpers import free_port
+    from tests.edge.sinks.sink_helpers import free_port
 
     port = free_port()  # bound and released: nobody listens there
     code, lines = doctor(capsys, config(sinks={"urls": [f"mqtt://cavatar@127.0.0.1:{port}/cavatar"]}))
@@ -288,7 +288,7 @@ def test_doctor_passes_on_a_board_without_torch(config):
     import subprocess
     import sys
 
-    from test_edge_without_torch import BLOCK_TORCH
+    from tests.edge.test_edge_without_torch import BLOCK_TORCH
 
     code = BLOCK_TORCH + (
         "import sys\n"

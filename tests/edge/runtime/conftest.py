@@ -5,15 +5,10 @@ simulator's true parameters: milliseconds, where the scripted session takes ~10 
 the scripted session itself is tested on a 32×32 carpet).
 """
 
-import sys
 from pathlib import Path
 
 import pytest
-
-sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parent.parent / "sinks"))  # sink_helpers: the mosquitto broker and subscriber
-
-from runtime_helpers import make_config, truth_calibration  # noqa: E402
+from runtime_helpers import MARK_COUNT, MARK_KPA, make_config, truth_calibration
 
 
 @pytest.fixture(scope="session")
@@ -31,8 +26,6 @@ def config(tmp_path, sim_calibration):
     return make
 
 
-MARK_COUNT = 3001  # a raw reading written into one sensel of every frame
-MARK_KPA = 7.654321  # a calibrated pressure written into the most loaded sensel of every frame
 
 
 class MarkedSource:

@@ -10,6 +10,8 @@ from typing import Any, Iterator
 
 SEED = 7
 GRID = 96
+MARK_COUNT = 3001  # a raw reading written into one sensel of every frame
+MARK_KPA = 7.654321  # a calibrated pressure written into the most loaded sensel of every frame
 
 
 def truth_calibration(folder: Path) -> Path:

@@ -99,7 +99,7 @@ def test_seq_continues_across_runs_with_the_same_status_file(config, tmp_path):
 
 def test_the_runtime_publishes_to_mqtt_with_the_password_from_the_environment(mqtt_broker, config, tmp_path,
                                                                               monkeypatch):
-    from sink_helpers import Subscriber
+    from tests.edge.sinks.sink_helpers import Subscriber
 
     broker = mqtt_broker(users={"cavatar": "s3cret", "watcher": "w"})
     sub = Subscriber(broker.port, ["cavatar/#"], username="watcher", password="w")
@@ -122,6 +122,6 @@ def test_the_runtime_publishes_to_mqtt_with_the_password_from_the_environment(mq
 
 @pytest.fixture
 def mqtt_broker(tmp_path):
-    from sink_helpers import brokers
+    from tests.edge.sinks.sink_helpers import brokers
 
     yield from brokers(tmp_path)

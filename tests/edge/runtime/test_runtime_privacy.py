@@ -9,8 +9,7 @@ import json
 import re
 
 import numpy as np
-from conftest import MARK_COUNT, MARK_KPA
-from runtime_helpers import finite_numbers, longest_number_array, pressure_keys, read_jsonl
+from runtime_helpers import MARK_COUNT, MARK_KPA, finite_numbers, longest_number_array, pressure_keys, read_jsonl
 
 GRID = 96
 

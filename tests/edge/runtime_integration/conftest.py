@@ -6,18 +6,11 @@ carpet, configurations) and the sink tests' real mosquitto and subscriber
 calibration of ``sim://?seed=7`` made from the simulator's truth (milliseconds, not the 10-s session).
 """
 
-import sys
 from pathlib import Path
 
 import pytest
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[2]
-for p in (HERE, HERE.parent / "runtime", HERE.parent / "sinks", ROOT):  # ROOT: bench.runtime_soak
-    if str(p) not in sys.path:
-        sys.path.insert(0, str(p))
-
-from runtime_helpers import truth_calibration  # noqa: E402
+from tests.edge.runtime.runtime_helpers import truth_calibration
 
 
 @pytest.fixture(scope="session")
@@ -36,7 +29,7 @@ def one_person_frames():
 @pytest.fixture
 def mqtt_broker(tmp_path):
     """Factory: ``mqtt_broker()`` → a started mosquitto on a free 127.0.0.1 port (stopped after the test)."""
-    from sink_helpers import brokers
+    from tests.edge.sinks.sink_helpers import brokers
 
     yield from brokers(tmp_path)
 
@@ -44,7 +37,7 @@ def mqtt_broker(tmp_path):
 @pytest.fixture
 def subscribe():
     """Factory of paho subscribers (sink_helpers.Subscriber), closed after the test."""
-    from sink_helpers import Subscriber
+    from tests.edge.sinks.sink_helpers import Subscriber
 
     subs = []
 

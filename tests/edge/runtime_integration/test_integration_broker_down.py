@@ -12,8 +12,8 @@ import os
 import subprocess
 import sys
 
-from runtime_helpers import sim_url
-from sink_helpers import free_port
+from tests.edge.runtime.runtime_helpers import sim_url
+from tests.edge.sinks.sink_helpers import free_port
 
 
 def cavatar_run(tmp_path, calibration, sink, *extra, seconds=2.0):

@@ -18,8 +18,9 @@ import time
 
 import pytest
 from integration_helpers import RATE_HZ, runtime_on_board, seq_report, wait_until
-from runtime_helpers import make_config
-from sink_helpers import Gate
+
+from tests.edge.runtime.runtime_helpers import make_config
+from tests.edge.sinks.sink_helpers import Gate
 
 BEFORE_S, OUTAGE_S, AFTER_S = 2.0, 10.0, 2.0
 

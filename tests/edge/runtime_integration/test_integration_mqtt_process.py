@@ -15,7 +15,8 @@ import time
 
 import pytest
 from integration_helpers import bodies_validator, wait_until
-from runtime_helpers import sim_url
+
+from tests.edge.runtime.runtime_helpers import sim_url
 
 
 def start_run(tmp_path, device, broker, calibration):
