@@ -89,10 +89,8 @@ def test_rotation_by_time(tmp_path):
 
 
 WRITER = textwrap.dedent("""
-    import sys
-    sys.path.insert(0, {helpers!r})
-    from sink_helpers import body_record
     from edge.sinks import open_sink
+    from tests.edge.sinks.sink_helpers import body_record
     sink = open_sink({url!r}, device="carpet-01")
     seq = 0
     while True:
@@ -107,7 +105,7 @@ WRITER = textwrap.dedent("""
 def test_no_partial_line_when_the_writer_is_killed(tmp_path, flush_ms):
     path = tmp_path / "bodies.jsonl"
     url = f"jsonl://{path}?flush_ms={flush_ms}&rotate_mb=0.2&keep=0"  # keep every rotated file: all seqs are checked
-    proc = subprocess.Popen([sys.executable, "-c", WRITER.format(helpers=str(Path(__file__).parent), url=url)],
+    proc = subprocess.Popen([sys.executable, "-c", WRITER.format(url=url)],
                             stdout=subprocess.PIPE, text=True, cwd=REPO)
     try:
         assert proc.stdout.readline().strip() == "ready"
@@ -153,10 +151,9 @@ def test_stdout_sink_writes_one_record_per_line(capsys):
 
 
 def test_stdout_sink_in_a_pipe():
-    code = ("import sys; sys.path.insert(0, %r)\n"
-            "from sink_helpers import body_record\nfrom edge.sinks import open_sink\n"
+    code = ("from tests.edge.sinks.sink_helpers import body_record\nfrom edge.sinks import open_sink\n"
             "s = open_sink('jsonl:-', device='carpet-01')\n"
-            "[s.publish_bodies(body_record(i)) for i in range(4)]\ns.close()\n") % str(Path(__file__).parent)
+            "[s.publish_bodies(body_record(i)) for i in range(4)]\ns.close()\n")  # run from the checkout (cwd)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
     assert [json.loads(x)["seq"] for x in proc.stdout.splitlines()] == [0, 1, 2, 3]

@@ -69,9 +69,8 @@ def test_status_online_retained_then_offline_on_clean_close(broker, subscribe):
 
 PUBLISHER = textwrap.dedent("""
     import sys, time
-    sys.path.insert(0, {helpers!r})
-    from sink_helpers import body_record
     from edge.sinks import open_sink
+    from tests.edge.sinks.sink_helpers import body_record
     sink = open_sink({url!r}, device="carpet-01")
     assert sink.wait_connected(10)
     for seq in range(5):
@@ -84,7 +83,7 @@ PUBLISHER = textwrap.dedent("""
 
 def test_last_will_says_offline_when_the_publisher_is_killed(broker, subscribe):
     watcher = subscribe(broker.port, [T.status])
-    code = PUBLISHER.format(helpers=str(Path(__file__).parent), url=broker.url("qos=1&keepalive=2"))
+    code = PUBLISHER.format(url=broker.url("qos=1&keepalive=2"))
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, cwd=REPO)
     try:
         assert proc.stdout.readline().strip() == "ready"
