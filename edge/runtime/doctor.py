@@ -243,7 +243,7 @@ def _automatic_calibration(cfg: Any, url: str) -> tuple[Path, Finding | None]:
         o = source_options(url)
     except (SetupError, SourceError, ValueError) as exc:
         return Path(), Finding("calibration", FAIL, f"[calibration] file is empty. {exc}")
-    if not hasattr(plugin.module, "calibration_sensor"):
+    if plugin is None or not hasattr(plugin.module, "calibration_sensor"):
         return Path(), Finding("calibration", FAIL, f"[calibration] file is empty and {url} offers no sensor model "
                                "that `cavatar run` could calibrate by itself: set [calibration] file")
     if o.get("world", "bodies") != "bodies":
@@ -308,7 +308,7 @@ def check_model(cfg: Any, cal: Any, board: Board | None) -> list[Finding]:
     grids = []  # (what, (rows, cols)) the bundle's grid must equal
     if cal is not None:
         grids.append(("the calibration", tuple(int(n) for n in cal.shape)))
-    if board is not None and board.rows is not None:
+    if board is not None and board.rows is not None and board.cols is not None:
         grids.append((board.origin, (int(board.rows), int(board.cols))))
     problems = [f"the bundle is for a {bundle.grid[0]}×{bundle.grid[1]} carpet, {what} says {g[0]}×{g[1]}"
                 for what, g in grids if g != tuple(bundle.grid)]
