@@ -243,8 +243,7 @@ def _automatic_calibration(cfg: Any, url: str) -> tuple[Path, Finding | None]:
         o = source_options(url)
     except (SetupError, SourceError, ValueError) as exc:
         return Path(), Finding("calibration", FAIL, f"[calibration] file is empty. {exc}")
-    assert plugin is not None  # choose_calibration refused a carpet that no plug-in serves
-    if not hasattr(plugin.module, "calibration_sensor"):
+    if plugin is None or not hasattr(plugin.module, "calibration_sensor"):
         return Path(), Finding("calibration", FAIL, f"[calibration] file is empty and {url} offers no sensor model "
                                "that `cavatar run` could calibrate by itself: set [calibration] file")
     if o.get("world", "bodies") != "bodies":

@@ -11,13 +11,16 @@ virtual clock), ``speed=1`` in real time. Closing the link closes the plug-in's 
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from edge.health import OK, Board, CheckContext, Finding
 from edge.sources.base import Link, LinkLost, parse_url
 from edge.sources.plugins import Plugin
 from edge.urls import redact
 from firmware_protocol import codec
+
+if TYPE_CHECKING:
+    from firmware_protocol.virtual_board import VirtualBoard
 
 
 def packing_for(bits: int) -> int:
@@ -33,7 +36,7 @@ class VirtualCarpetLink(Link):
         self.speed = opts.get("speed", 1.0)
         self.paced = self.speed > 0
         self.rate_hz = 0.0
-        self.board: Any = None  # firmware_protocol's VirtualBoard, made by open()
+        self.board: VirtualBoard | None = None
         self._t0 = 0.0
         self._virtual_now = 0.0
 
@@ -70,14 +73,15 @@ class VirtualCarpetLink(Link):
             time.sleep(min(0.005, max(0.0, deadline - time.monotonic())))
 
     def _maybe_fault(self, data: bytes) -> bytes:
-        if self.opts.get("faults") and data:
+        board = self.board
+        if board is not None and self.opts.get("faults") and data:
             self._faults_at += 1
             if self._faults_at % 37 == 0:
-                self.board.flip_bits(3)
+                board.flip_bits(3)
             elif self._faults_at % 53 == 0:
-                self.board.garbage(40)
+                board.garbage(40)
             elif self._faults_at % 97 == 0:
-                self.board.tear_next_frame()
+                board.tear_next_frame()
         return data
 
     def write(self, data: bytes) -> None:
