@@ -14,7 +14,8 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
    lifted is matched again as a whole by the tracker). A track whose kept contacts carry less
    than ANCHOR_FRACTION of its weight (its weight on the way elsewhere: a slow sit-down onto the
    buttocks, on the board's path the feet read light long before they land) takes a contact
-   only within its weight: weight that moves adds none, and a whole newcomer is not taken.
+   only within its weight and as a whole cluster of new contacts: weight that moves adds none,
+   and a whole newcomer, or someone reappearing beyond its reach, is not taken.
    A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
    from its centre (slowly forgotten), so a lying body reaches farther than a standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
@@ -165,7 +166,7 @@ def group_blobs(
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
-    _reach(centres_m, forces_n, owner, bodies)  # a track that lost its footing is found again by the tracker, as a whole
+    _reach(centres_m, forces_n, owner, bodies, group_radius_m)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
     far, heavy, excess = set(), set(), set()
@@ -233,14 +234,18 @@ def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, fain
     return cluster
 
 
-def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
-    """Give each unowned blob to the body that reaches it best (in place on ``owner``): the least distance to
-    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands).
+def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodies: dict[int, Body],
+           group_radius_m: float) -> None:
+    """Give unowned blobs to the bodies that reach them best (in place on ``owner``): the least distance to
+    a body's predicted centre in units of its reach, within reach. Only bodies that kept a contact take part.
 
-    Only bodies that kept a contact take part. A body whose kept contacts carry less than ANCHOR_FRACTION
-    of its weight (its weight on the way to a new contact: sitting down onto the buttocks, landing after
-    a hop) takes a blob only while all it then carries stays within (1 + HEAVY_FRACTION) of its weight:
-    weight that moves adds none. A blob it cannot take goes to the next body that reaches it.
+    1. A body whose kept contacts carry less than ANCHOR_FRACTION of its weight (its weight on the way to
+       a new contact: sitting down onto the buttocks, landing after a hop) takes new contacts as a whole
+       cluster (all within group_radius_m of each other), when it is the best reacher of every one of
+       them and all it then carries stays within (1 + HEAVY_FRACTION) of its weight: weight that moves
+       adds none. A cluster it reaches only in part (someone reappearing beyond it) stays new.
+    2. The rest join, one by one, the body that reaches each best among the others (several blobs may
+       join one body: two hands put down at once).
     """
     free = np.flatnonzero(owner == 0)
     keys = np.unique(owner[owner > 0])
@@ -249,18 +254,26 @@ def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodie
     pred = np.array([bodies[int(k)].centre_m for k in keys])
     reach = np.array([bodies[int(k)].reach_m for k in keys])
     d = cdist(centres_m[free], pred) / reach  # (free, bodies)
+    best = d.argmin(axis=1)
     carried = np.array([float(forces_n[owner == k].sum()) for k in keys])
     weight = np.array([np.inf if bodies[int(k)].weight_n is None else bodies[int(k)].weight_n for k in keys])
-    anchored = carried >= ANCHOR_FRACTION * weight
-    for j in np.argsort(d.min(axis=1), kind="stable"):  # the best reached first
-        for b in np.argsort(d[j], kind="stable"):
-            if d[j, b] > 1.0:
-                break
-            f = float(forces_n[free[j]])
-            if anchored[b] or carried[b] + f <= (1.0 + HEAVY_FRACTION) * weight[b]:
-                owner[free[j]] = keys[b]
-                carried[b] += f
-                break
+    light = carried < ANCHOR_FRACTION * weight  # never for an unknown weight
+    taken = np.zeros(len(free), dtype=bool)
+    if light.any():
+        cluster = within_span(centres_m[free], group_radius_m)
+        for c in np.unique(cluster):
+            members = cluster == c
+            b = int(best[members][0])
+            force = float(forces_n[free[members]].sum())
+            if light[b] and (best[members] == b).all() and (d[members, b] <= 1.0).all() \
+                    and carried[b] + force <= (1.0 + HEAVY_FRACTION) * weight[b]:
+                owner[free[members]] = keys[b]
+                carried[b] += force
+                taken |= members
+    d[:, light] = np.inf
+    best = d.argmin(axis=1)
+    ok = ~taken & (d[np.arange(len(free)), best] <= 1.0)
+    owner[free[ok]] = keys[best[ok]]
 
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
