@@ -14,7 +14,8 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
    lifted is matched again as a whole by the tracker). A track whose kept contacts carry less
    than ANCHOR_FRACTION of its weight (its weight on the way elsewhere: a slow sit-down onto the
    buttocks, on the board's path the feet read light long before they land) takes a contact
-   only within its weight: weight that moves adds none, and a whole newcomer is not taken.
+   only within its weight and as a whole cluster of new contacts: weight that moves adds none,
+   and a whole newcomer, or someone reappearing beyond its reach, is not taken.
    A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
    from its centre (slowly forgotten), so a lying body reaches farther than a standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
@@ -121,11 +122,13 @@ def single_linkage(centres_m: np.ndarray, radius_m: float) -> np.ndarray:
 
 @dataclass(frozen=True, slots=True)
 class Grouping:
-    """groups: [(blob indices, track key or 0 for new)]; far, heavy: keys whose split evidence grew this frame."""
+    """groups: [(blob indices, track key or 0 for new)]; far, heavy: keys whose split evidence grew this frame;
+    excess: keys whose contacts carry more than the body's weight by the heavy threshold (none split off this frame)."""
 
     groups: list[tuple[np.ndarray, int]]
     far: frozenset[int]
     heavy: frozenset[int]
+    excess: frozenset[int] = frozenset()
 
 
 def group_blobs(
@@ -141,6 +144,7 @@ def group_blobs(
     newcomer_s: float = 0.5,
     frame_s: float = 1 / 14,
     stayed: float | None = None,
+    before_n: np.ndarray | None = None,
 ) -> Grouping:
     """Blob centres (n, 2) m, forces (n,) N, prior keys (n,) and the tracks' bodies → groups of blobs.
 
@@ -149,6 +153,8 @@ def group_blobs(
     can be split off as someone stepping in (frame_s: the frame interval, to count back).
     stayed: the fraction of the previous frame's contact pressure still where it was (see
     :func:`moved_at_once`; None: unknown).
+    before_n: (n,) what each blob's sensels carried when its track began to carry more than its weight
+    (see :func:`_split_heavy`; None: not known, no such check).
     """
     n = len(centres_m)
     if n == 0:
@@ -160,10 +166,11 @@ def group_blobs(
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
-    _reach(centres_m, forces_n, owner, bodies)  # a track that lost its footing is found again by the tracker, as a whole
+    _reach(centres_m, forces_n, owner, bodies, group_radius_m)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
-    far, heavy = set(), set()
+    far, heavy, excess = set(), set(), set()
+    grown = None if before_n is None else forces_n - before_n
     for k in np.unique(owner[owner > 0]):
         k = int(k)
         idx = np.flatnonzero(owner == k)
@@ -175,18 +182,22 @@ def group_blobs(
                 groups += [(idx[keep], k), (idx[rest], 0)]
                 continue
         recent = ages[idx] <= newcomer_s + bodies[k].heavy_frames * frame_s
-        part = _split_heavy(centres_m[idx], forces_n[idx], recent, bodies[k], group_radius_m, min_person_force_n)
+        if _excess_n(forces_n[idx], bodies[k], min_person_force_n) is not None:
+            excess.add(k)
+        part = _split_heavy(centres_m[idx], forces_n[idx], recent, bodies[k], group_radius_m, min_person_force_n,
+                            None if grown is None else grown[idx])
         if part is not None:
             heavy.add(k)
             if bodies[k].heavy_frames + 1 >= split_frames:
                 groups += [(idx[~part], k), (idx[part], 0)]
+                excess.discard(k)
                 continue
         groups.append((idx, k))
     new = np.flatnonzero(owner == 0)
     if len(new):
         cluster = _new_people(centres_m[new], forces_n[new], group_radius_m, 0.25 * min_person_force_n)
         groups += [(new[cluster == c], 0) for c in np.unique(cluster)]
-    return Grouping(groups, frozenset(far), frozenset(heavy))
+    return Grouping(groups, frozenset(far), frozenset(heavy), frozenset(excess))
 
 
 def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Body], stayed: float | None = None) -> bool:
@@ -223,14 +234,18 @@ def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, fain
     return cluster
 
 
-def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
-    """Give each unowned blob to the body that reaches it best (in place on ``owner``): the least distance to
-    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands).
+def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodies: dict[int, Body],
+           group_radius_m: float) -> None:
+    """Give unowned blobs to the bodies that reach them best (in place on ``owner``): the least distance to
+    a body's predicted centre in units of its reach, within reach. Only bodies that kept a contact take part.
 
-    Only bodies that kept a contact take part. A body whose kept contacts carry less than ANCHOR_FRACTION
-    of its weight (its weight on the way to a new contact: sitting down onto the buttocks, landing after
-    a hop) takes a blob only while all it then carries stays within (1 + HEAVY_FRACTION) of its weight:
-    weight that moves adds none. A blob it cannot take goes to the next body that reaches it.
+    1. A body whose kept contacts carry less than ANCHOR_FRACTION of its weight (its weight on the way to
+       a new contact: sitting down onto the buttocks, landing after a hop) takes new contacts as a whole
+       cluster (all within group_radius_m of each other), when it is the best reacher of every one of
+       them and all it then carries stays within (1 + HEAVY_FRACTION) of its weight: weight that moves
+       adds none. A cluster it reaches only in part (someone reappearing beyond it) stays new.
+    2. The rest join, one by one, the body that reaches each best among the others (several blobs may
+       join one body: two hands put down at once).
     """
     free = np.flatnonzero(owner == 0)
     keys = np.unique(owner[owner > 0])
@@ -239,18 +254,26 @@ def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodie
     pred = np.array([bodies[int(k)].centre_m for k in keys])
     reach = np.array([bodies[int(k)].reach_m for k in keys])
     d = cdist(centres_m[free], pred) / reach  # (free, bodies)
+    best = d.argmin(axis=1)
     carried = np.array([float(forces_n[owner == k].sum()) for k in keys])
     weight = np.array([np.inf if bodies[int(k)].weight_n is None else bodies[int(k)].weight_n for k in keys])
-    anchored = carried >= ANCHOR_FRACTION * weight
-    for j in np.argsort(d.min(axis=1), kind="stable"):  # the best reached first
-        for b in np.argsort(d[j], kind="stable"):
-            if d[j, b] > 1.0:
-                break
-            f = float(forces_n[free[j]])
-            if anchored[b] or carried[b] + f <= (1.0 + HEAVY_FRACTION) * weight[b]:
-                owner[free[j]] = keys[b]
-                carried[b] += f
-                break
+    light = carried < ANCHOR_FRACTION * weight  # never for an unknown weight
+    taken = np.zeros(len(free), dtype=bool)
+    if light.any():
+        cluster = within_span(centres_m[free], group_radius_m)
+        for c in np.unique(cluster):
+            members = cluster == c
+            b = int(best[members][0])
+            force = float(forces_n[free[members]].sum())
+            if light[b] and (best[members] == b).all() and (d[members, b] <= 1.0).all() \
+                    and carried[b] + force <= (1.0 + HEAVY_FRACTION) * weight[b]:
+                owner[free[members]] = keys[b]
+                carried[b] += force
+                taken |= members
+    d[:, light] = np.inf
+    best = d.argmin(axis=1)
+    ok = ~taken & (d[np.arange(len(free)), best] <= 1.0)
+    owner[free[ok]] = keys[best[ok]]
 
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
@@ -264,8 +287,17 @@ def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: fl
     return comp == heaviest, comp != heaviest
 
 
+def _excess_n(forces_n: np.ndarray, body: Body, min_person_force_n: float) -> float | None:
+    """What the contacts carry beyond the body's weight when that reaches HEAVY_FRACTION of it (and
+    min_person_force_n), else None (also while the weight is unknown)."""
+    if body.weight_n is None:
+        return None
+    excess = float(forces_n.sum()) - body.weight_n
+    return excess if excess >= max(min_person_force_n, HEAVY_FRACTION * body.weight_n) else None
+
+
 def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray, body: Body, group_radius_m: float,
-                 min_person_force_n: float) -> np.ndarray | None:
+                 min_person_force_n: float, grown_n: np.ndarray | None = None) -> np.ndarray | None:
     """Mask of the contacts that carry a track's excess weight (someone stepping in beside it), or None.
 
     The excess must reach HEAVY_FRACTION of the body's weight (and min_person_force_n). Candidates are
@@ -275,26 +307,35 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
     provided it carries at least half the excess and the rest still carries KEEP_FRACTION of the
     body's weight: someone lying back moves weight from buttocks to shoulders (and on the board's
     path reads heavier, spread over more sensels), someone stepping in takes none from the body.
+    A recent cluster that carries the excess but took weight from the body is that posture change:
+    then no contact is split off (on the board's path a sit-up's back reads up to twice the weight,
+    and the fallback gave the buttocks away as a newcomer). A single contact must also have gained half
+    the excess since the excess began (``grown_n``, (n,) N): a newcomer's weight lands where they
+    stand; a buttocks that carried the body all along did not.
     """
-    if body.weight_n is None or len(centres_m) < 2:
+    excess = _excess_n(forces_n, body, min_person_force_n)
+    if excess is None or len(centres_m) < 2:
         return None
     total = float(forces_n.sum())
-    weight_n = body.weight_n
-    excess = total - weight_n
-    if excess < max(min_person_force_n, HEAVY_FRACTION * weight_n):
-        return None
 
-    def fits(f: float) -> bool:  # carries the excess, and took no weight from the body (a back put down does)
-        return f >= max(min_person_force_n, 0.5 * excess) and total - f >= max(min_person_force_n, KEEP_FRACTION * weight_n)
+    def carries(f: float) -> bool:  # carries the excess
+        return f >= max(min_person_force_n, 0.5 * excess)
+
+    def keeps(f: float) -> bool:  # the rest still carries the body: f took no weight from it (a back put down does)
+        return total - f >= max(min_person_force_n, KEEP_FRACTION * body.weight_n)
 
     idx = np.flatnonzero(recent)
     parts = []
     if len(idx):
         comp = within_span(centres_m[idx], group_radius_m)
         parts = [idx[comp == c] for c in np.unique(comp)]
-        parts = [p for p in parts if fits(float(forces_n[p].sum()))]
+        if any(carries(f) and not keeps(f) for f in (float(forces_n[p].sum()) for p in parts)):
+            return None  # the body's own weight moved onto a new contact and reads heavier there (lying back)
+        parts = [p for p in parts if carries(float(forces_n[p].sum())) and keeps(float(forces_n[p].sum()))]
     if not parts:
-        parts = [np.array([i]) for i in range(len(centres_m)) if fits(float(forces_n[i]))]
+        grew = np.ones(len(centres_m), bool) if grown_n is None else grown_n >= 0.5 * excess
+        parts = [np.array([i]) for i in range(len(centres_m))
+                 if grew[i] and carries(float(forces_n[i])) and keeps(float(forces_n[i]))]
     if not parts:
         return None
     best = min(parts, key=lambda p: abs(float(forces_n[p].sum()) - excess))

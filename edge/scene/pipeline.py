@@ -165,7 +165,7 @@ class SceneTracker:
         split_frames = max(1, int(round(cfg.split_s / self._dt_s)))
         grouping = group_blobs(centres, forces, priors, self.people.bodies(t_s), cfg.group_radius_m, cfg.split_distance_m,
                                cfg.min_person_force_n, split_frames, t_s - joined, cfg.newcomer_s, self._dt_s,
-                               self._stayed(filtered))
+                               self._stayed(filtered), self._before_n(labels, priors))
         groups = grouping.groups
         lut = np.zeros(len(blobs) + 1, dtype=np.int32)
         for g, (idx, _) in enumerate(groups):
@@ -194,6 +194,10 @@ class SceneTracker:
                 extent = float(np.max(np.linalg.norm(centres[idx] - o.cop_m, axis=1)))
                 self.people.observe_body(tr, extent, float(forces[idx].sum()), tr.key in grouping.far,
                                          tr.key in grouping.heavy, self._dt_s)
+                if tr.key not in grouping.excess:
+                    tr.excess_ref_kpa = None
+                elif tr.excess_ref_kpa is None:
+                    tr.excess_ref_kpa = self._prev_pressure  # never written in place: a new array each frame
         keys = np.zeros(len(groups) + 1, dtype=np.int32)
         for g, tr in enumerate(tracks):
             keys[g + 1] = 0 if tr is None else tr.key
@@ -224,6 +228,24 @@ class SceneTracker:
         before = self._prev_pressure[on]
         total = float(before.sum(dtype=np.float64))
         return float(np.minimum(before, filtered[on]).sum(dtype=np.float64)) / total if total > 0 else None
+
+    def _before_n(self, labels: np.ndarray, priors: np.ndarray) -> np.ndarray | None:
+        """(n_blobs,) N: the force on each blob's sensels in the frame before its track's excess began (see
+        edge.scene.people._split_heavy), or in the previous frame (a track without excess, a new contact)."""
+        if self._prev_pressure is None:
+            return None
+        n, flat = len(priors), labels.reshape(-1)
+        scale = self.pitch_m * self.pitch_m * 1e3
+
+        def on(ref: np.ndarray) -> np.ndarray:
+            return np.bincount(flat, weights=ref.reshape(-1), minlength=n + 1)[1:n + 1] * scale
+
+        out = on(self._prev_pressure)
+        for k in np.unique(priors[priors > 0]):
+            tr = self.people.tracks.get(int(k))
+            if tr is not None and tr.excess_ref_kpa is not None:
+                out[priors == k] = on(tr.excess_ref_kpa)[priors == k]
+        return out
 
     def _joined_s(self, labels: np.ndarray, priors: np.ndarray, t_s: float) -> np.ndarray:
         """(n_blobs,) when each blob's contact joined the track it had last frame (its prior); t_s for new ones."""

@@ -46,6 +46,7 @@ class Track:
     far_frames: int = 0  # consecutive frames with parts farther apart than split_distance_m
     heavy_frames: int = 0  # consecutive frames carrying more than its weight with a part that carries the excess
     contact_force_n: float | None = None  # what its contacts carried in the last frame (None: not seen in it)
+    excess_ref_kpa: np.ndarray | None = None  # (H, W) filtered pressure of the frame before its excess began (None: no excess)
 
     def predict(self, t_s: float, horizon_s: float = 0.25) -> np.ndarray:
         """Constant-velocity prediction, extrapolated at most ``horizon_s`` (a coasting track's velocity goes stale)."""
