@@ -57,18 +57,19 @@ def support_point(ball_w: np.ndarray, foot_rot: np.ndarray, geometry, heel_rad: 
     return (ball_w + (foot_rot @ u) * off[:, None])[:, :2]
 
 
-def zmp_com(p: np.ndarray, rate_hz: float, height_m: float) -> np.ndarray:
+def zmp_com(p: np.ndarray, rate_hz: float, height_m) -> np.ndarray:
     """The COM path (T,2) whose zero-moment point is p (T,2): x − (z/g)·ẍ = p with finite
-    differences at rate_hz and zero velocity at both ends."""
+    differences at rate_hz and zero velocity at both ends. height_m: z, a scalar or (T,) (where
+    the COM moves up and down: its height over 1 + z̈/g, as the ZMP com − z·ẍ/(g + z̈) has it)."""
     n = len(p)
     if n < 3:
         return np.asarray(p, float).copy()
-    a = height_m / G_M_S2 * rate_hz ** 2
-    ab = np.zeros((3, n))
-    ab[0, 1:] = -a
+    a = np.broadcast_to(np.asarray(height_m, float) / G_M_S2 * rate_hz ** 2, (n,))
+    ab = np.zeros((3, n))  # banded: ab[1 + i − j, j] = A[i, j]
+    ab[0, 1:] = -a[:-1]
     ab[1, :] = 1.0 + 2.0 * a
-    ab[1, [0, -1]] = 1.0 + a
-    ab[2, :-1] = -a
+    ab[1, [0, -1]] = 1.0 + a[[0, -1]]
+    ab[2, :-1] = -a[1:]
     return solve_banded((1, 1), ab, np.asarray(p, float))
 
 

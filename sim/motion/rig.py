@@ -10,12 +10,14 @@ local joint rotations plus a contact schedule into world ``pose_aa`` and ``trans
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import savgol_filter
 from scipy.spatial.transform import Rotation
 
 from edge.body import SMPL_PARENTS, BodyModel, lbs
 from edge.body.rotations import euler_xyz_deg_to_matrix as euler_deg_to_matrix  # noqa: F401  (sim.motion uses these names)
 from edge.body.rotations import matrix_to_axis_angle as matrix_to_rotvec  # noqa: F401
 from edge.body.rotations import skew
+from sim.contact.track import ACC_WINDOW
 from sim.motion.balance import foot_geometry, left_weight, support_point, zmp_com
 from sim.motion.swing import swing_ankle_path, swing_spans
 
@@ -412,9 +414,7 @@ class Rig:
         for it in range(iterations):
             g_rot, g_t = self.fk(local)
             if com_path is not None:  # lowering the pelvis bent the knees forward: keep the COM on its path
-                desired, wgt = com_path
-                com = transl[:, :2] + self.mass_model.com_from_fk(g_rot, g_t)[:, :2]
-                transl[:, :2] += wgt[:, None] * (desired - com)
+                self._follow_com(transl, com_path, g_rot, g_t)
             need = np.zeros(n)
             for q, (frames, wgt, target, on) in solve.items():
                 f = frames[on]
@@ -474,13 +474,32 @@ class Rig:
                 moved_body = 0.0
         if moved_body >= 1e-4:  # the body moved after the last IK: put the limbs back on their locks
             put_limbs(*self.fk(local))
+        if com_path is not None:
+            # The path again for the body's own COM height and vertical acceleration (the ZMP is
+            # com − z·ẍ/(g + z̈); a 1 cm COM error at a step's sway swings it ~4 cm), followed closely.
+            g_rot, g_t = self.fk(local)
+            z = transl[:, 2] + self.mass_model.com_from_fk(g_rot, g_t)[:, 2]
+            acc_z = savgol_filter(z, ACC_WINDOW, 3, deriv=2, delta=1.0 / rate_hz) if n >= ACC_WINDOW else np.zeros(n)
+            p, wgt, _ = com_path
+            com_path = (p, wgt, zmp_com(p, rate_hz, z / (1.0 + acc_z / 9.81)))
+            for _ in range(_COM_ROUNDS):
+                self._follow_com(transl, com_path, g_rot, g_t)
+                put_limbs(g_rot, g_t)
+                g_rot, g_t = self.fk(local)
         return transl
+
+    def _follow_com(self, transl, com_path, g_rot, g_t) -> None:
+        """Shift the pelvis (in place) by the COM's distance from its path (com_path: support point
+        (T,2), weight (T,), desired COM (T,2))."""
+        _, wgt, desired = com_path
+        com = transl[:, :2] + self.mass_model.com_from_fk(g_rot, g_t)[:, :2]
+        transl[:, :2] += wgt[:, None] * (desired - com)
 
     def _balance(self, local, transl, contact, anchor, heel, foot_rot, balance, rate_hz, put_limbs, rounds: int = 3):
         """Shift the pelvis (in place) where the body stands on its feet alone so that the COM
         follows the path whose zero-moment point is the feet's support point; faded in and
         out over a few frames around those spans. The locked feet are put back by IK.
-        Returns (desired COM (T,2), weight (T,)) for the later passes, or None."""
+        Returns (support point (T,2), weight (T,), desired COM (T,2)) for the later passes, or None."""
         feet = contact[:, [LF, RF]]
         feet_only = feet.any(1) & ~contact[:, [LH, RH, BUTT, BACK]].any(1) & np.isin(anchor, (LF, RF)) & balance
         if not feet_only.any():
@@ -499,7 +518,7 @@ class Rig:
                 desired = zmp_com(p, rate_hz, self.com_height)
             transl[:, :2] += wgt[:, None] * (desired - com)
             put_limbs(g_rot, g_t)
-        return desired, wgt
+        return p, wgt, desired
 
     def _sit_over_buttocks(self, local, contact, anchor, seated, rounds: int = 3) -> None:
         """Sitting on the floor without the hands: flex (or extend) the lower spine so that the
@@ -546,6 +565,7 @@ class Rig:
 
 _SMOOTH = 4  # frames over which transl corrections are spread
 _MAX_SWING_S = 1.2  # a foot off the floor longer than this is not a walking step's swing
+_COM_ROUNDS = 3  # final passes that put the COM back on its balanced path after the reach and floor passes
 SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
 _UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
 _SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis

@@ -9,7 +9,7 @@ import pytest
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, Subject, person_track
-from sim.motion.balance import FOOT_COP_FRAC, HEEL_COP_FRAC, ROLL_DEG, ROLL_FRAC, TOES_COP_FRAC, left_weight
+from sim.motion.balance import FOOT_COP_FRAC, G_M_S2, HEEL_COP_FRAC, ROLL_DEG, ROLL_FRAC, TOES_COP_FRAC, left_weight, zmp_com
 from sim.motion.rig import LF, RF, Rig
 from sim.motion.swing import CLEARANCE_M, swing_ankle_path, swing_spans
 
@@ -40,6 +40,17 @@ def test_the_cop_rolls_from_heel_to_toes_with_the_heel_angle():
     assert np.interp(0.0, ROLL_DEG, ROLL_FRAC) == FOOT_COP_FRAC
     assert np.interp(-15.0, ROLL_DEG, ROLL_FRAC) == HEEL_COP_FRAC
     assert np.interp(30.0, ROLL_DEG, ROLL_FRAC) == TOES_COP_FRAC
+
+
+def test_the_com_path_puts_its_zmp_on_the_support_point_at_a_changing_height():
+    rng = np.random.default_rng(0)
+    p = np.repeat(rng.uniform(-0.1, 0.1, (12, 2)), 8, axis=0)  # a support point jumping from foot to foot
+    height = 0.85 + 0.03 * np.sin(np.arange(len(p)) / 3.0)  # the COM bobbing as in walking
+    x = zmp_com(p, RATE, height)
+    acc = (x[2:] - 2 * x[1:-1] + x[:-2]) * RATE ** 2
+    np.testing.assert_allclose(x[1:-1] - height[1:-1, None] / G_M_S2 * acc, p[1:-1], atol=1e-9)
+    assert np.abs(np.diff(x, axis=0)).max() < 0.5 * np.abs(np.diff(p, axis=0)).max()  # smooth: it anticipates each jump
+    np.testing.assert_allclose(zmp_com(p, RATE, 0.85), zmp_com(p, RATE, np.full(len(p), 0.85)))
 
 
 def test_swing_spans_are_the_gaps_inside_the_planned_frames():
