@@ -21,7 +21,8 @@ from where the body then lies: the time since the last stance nearby (within fal
 that stance stood at least min_shift_m away (the load moved by about a body's height: sitting down, or
 a bag dropped or a pet lying down beside a standing person, moves it less) carrying at least
 1/max_load_ratio of the lying load, or if the body crumpled where it stood (down within collapse_window_s,
-now lying at full length, collapse_min_length_m, and nobody still standing in it) — or if it was someone seated on a chair beside the carpet (a still,
+now lying at full length, collapse_min_length_m, pressed at most floor_long_max_kpa, and nobody still
+standing in it) — or if it was someone seated on a chair beside the carpet (a still,
 steady, light print for seated_s, at most 1/seated_load_ratio of the lying load: their weight arriving
 on the floor is a fall wherever it lands). ``fall`` is raised once the episode
 has lasted confirm_s when the arrival took at most fall_window_s (confidence falls with the arrival
@@ -370,10 +371,13 @@ class FallDetector:
         """Someone who crumpled where they stood (knees giving way, then over to the side): the stance ``run``
         (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
         load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
-        reads light; a deliberate lie-down stays low for longer); ``b`` lies at full length and none of its
+        reads light; a deliberate lie-down stays low for longer); ``b`` lies at full length, its weight spread
+        (at most floor_long_max_kpa: a push-up's plank is as long, on its hands and feet), and none of its
         tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
         c = self.config
         if start_t - end_t > c.collapse_window_s or b.length_m < c.collapse_min_length_m:
+            return False
+        if b.force_n > 1e3 * c.floor_long_max_kpa * b.area_m2:  # a plank: long, but on small, firm prints
             return False
         if any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
             return False
