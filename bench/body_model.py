@@ -84,14 +84,16 @@ def main() -> int:
             "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS"),
             "load_average_1_5_15_at_end": [round(x, 2) for x in os.getloadavg()],
         },
-        "method": f"median of {REPEATS} rounds, each the mean of enough calls to last ~{0.3 / REPEATS:.2f} s; float32 vertex products, float64 chain",
+        "method": f"median of {REPEATS} rounds, each the mean of enough calls to last ~{0.3 / REPEATS:.2f} s; "
+                  "float32 vertex products, float64 chain",
         "results": results,
     }
     path = Path(__file__).resolve().parent / "results" / "body_model.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(out, indent=1) + "\n")
     for r in results:
-        print(f"{r['impl']:28s} {r['model']:5s} {r['path']:6s} B={r['batch']:<3d} {r['ms_per_call']:9.4f} ms/call {r['ms_per_frame']:8.4f} ms/frame")
+        print(f"{r['impl']:28s} {r['model']:5s} {r['path']:6s} B={r['batch']:<3d} "
+              f"{r['ms_per_call']:9.4f} ms/call {r['ms_per_frame']:8.4f} ms/frame")
     return 0
 
 

@@ -30,7 +30,6 @@ from calibration.runtime import BaselineTracker, CalibratedFrames  # noqa: E402
 from sim.footsteps import FootstepCarpet  # noqa: E402
 from sim.sensor import CarpetSensor  # noqa: E402
 
-
 RATE_HZ = 14.0
 GOAL_MS = 3.0
 
@@ -137,7 +136,8 @@ def main(repeats: int = 5) -> None:
     out = {
         "benchmark": "calibration_runtime", "grid": "96x96", "rate_hz": RATE_HZ,
         "goal": f"calibrate + filter + segment + track ≤ {GOAL_MS} ms per 96×96 frame on one core (issue 5)",
-        "frames": "30 s of two people walking (sim.footsteps) on CarpetSensor.random(0), 14 Hz, generated before timing; each call timed alone; 5 repeats, each statistic the lowest over the repeats (a shared machine)",
+        "frames": "30 s of two people walking (sim.footsteps) on CarpetSensor.random(0), 14 Hz, generated before timing; "
+                  "each call timed alone; 5 repeats, each statistic the lowest over the repeats (a shared machine)",
         "command": "python bench/calibration_runtime.py", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "machine": {"platform": platform.platform(), "cpu_model": machine.cpu_model(), "cpu_count": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__, "threads": 1,

@@ -40,7 +40,8 @@ GOAL = 50.0
 FULL_SCALE = {"u8": 255, "packed12": 4095, "u16": 4095}  # u16 carries a 12-bit ADC, as the default board
 
 
-def carpet_stream(packing: str, seconds: float, rows: int = 96, cols: int = 96, rate_hz: float = 14.0, seed: int = 1) -> tuple[bytes, float, int]:
+def carpet_stream(packing: str, seconds: float, rows: int = 96, cols: int = 96, rate_hz: float = 14.0,
+                  seed: int = 1) -> tuple[bytes, float, int]:
     """(wire bytes, duration in s, packets) of ``seconds`` of streaming."""
     rng = np.random.default_rng(seed)
     code = codec.PACKING[packing]
@@ -49,7 +50,8 @@ def carpet_stream(packing: str, seconds: float, rows: int = 96, cols: int = 96, 
     period_us = round(1e6 / rate_hz)
     row_us = period_us * 8 // (10 * rows)  # the scan takes 80 % of the period
     seq = 0
-    out = [codec.encode(codec.Info(seq, codec.PROTOCOL_VERSION, codec.DEFINITION_HASH, 1, 0, 0, "bench-carpet", rows, cols, 1, 1, 12, code, -1, round(rate_hz * 1000), 3))]
+    out = [codec.encode(codec.Info(seq, codec.PROTOCOL_VERSION, codec.DEFINITION_HASH, 1, 0, 0, "bench-carpet", rows, cols,
+                                   1, 1, 12, code, -1, round(rate_hz * 1000), 3))]
     seq += 1
     t0 = 3_000_000_000  # the device clock wraps during a long run
     for f in range(frames):
@@ -59,7 +61,8 @@ def carpet_stream(packing: str, seconds: float, rows: int = 96, cols: int = 96, 
             out.append(codec.encode(codec.make_row(seq, f, (t_frame + r * row_us) & 0xFFFFFFFF, r, vals[r].tolist(), code)))
             seq += 1
         scan = (rows - 1) * row_us
-        out.append(codec.encode(codec.FrameEnd(seq & 0xFFFF, f, (t_frame + scan) & 0xFFFFFFFF, rows, scan, codec.frame_crc32([vals.astype("<u2").tobytes()]))))
+        crc = codec.frame_crc32([vals.astype("<u2").tobytes()])
+        out.append(codec.encode(codec.FrameEnd(seq & 0xFFFF, f, (t_frame + scan) & 0xFFFFFFFF, rows, scan, crc)))
         seq += 1
         if f % round(rate_hz) == 0:
             out.append(codec.encode(codec.Status(seq & 0xFFFF, t_frame, f // 14, f, 0, 0, 0, 0, 0, 2315, 65535)))
@@ -162,7 +165,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=9, help="timed runs per case (default 9)")
     ap.add_argument("--chunk", type=int, default=4096, help="bytes per feed() call (default 4096)")
     ap.add_argument("--packings", default="packed12,u8,u16", help="comma-separated (default packed12,u8,u16)")
-    ap.add_argument("--extra-chunk", type=int, default=64, help="also time packed12 in reads of this size (0: skip; default 64, one USB full-speed packet)")
+    ap.add_argument("--extra-chunk", type=int, default=64,
+                    help="also time packed12 in reads of this size (0: skip; default 64, one USB full-speed packet)")
     ap.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "decoder_throughput.json")
     ap.add_argument("--profile", action="store_true", help="print a cProfile of one packed12 run")
     ap.add_argument("--pin", action="store_true", help="pin the process to one core (os.sched_setaffinity)")
@@ -189,7 +193,8 @@ def main(argv: list[str] | None = None) -> int:
         "command": " ".join(["python", "bench/decoder_throughput.py", *(argv if argv is not None else sys.argv[1:])]),
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
         "machine": {**machine(), "pinned_to_core": core},
-        "timing": "x_real_time = stream duration / CPU time of the decoding thread (time.thread_time); x_real_time_wall uses wall-clock time",
+        "timing": "x_real_time = stream duration / CPU time of the decoding thread (time.thread_time); "
+                  "x_real_time_wall uses wall-clock time",
         "stream": "INFO, then per frame 96 ROWs (96 samples, mid-scale ± 1 % noise) + FRAME_END, STATUS once a second; 96×96 at 14 Hz",
         "results": results,
     }

@@ -118,7 +118,8 @@ def models(d: dict[str, Any] | None) -> list[str]:
     front = ", ".join(f"{p['variant']} ({p['threads']} thr)" for p in d["pareto_front"])
     if front:
         lines += ["", f"Pareto front (latency, MPJPE): {front}."]
-    return lines + ["", "Full table (frames/s, peak memory) and the latency–MPJPE plot: [docs/bench/speed_error.md](docs/bench/speed_error.md).",
+    return lines + ["", "Full table (frames/s, peak memory) and the latency–MPJPE plot: "
+                        "[docs/bench/speed_error.md](docs/bench/speed_error.md).",
                     "", measured_on(d)]
 
 

@@ -86,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
     totals = {}
     for k in (2, 3):
         rows = [r for r in tracks if r["people"] == k]
-        totals[f"{k}_people"] = {key: sum(r[key] for r in rows) for key in ("frames", "true_people", "missed", "false_positives", "id_switches")}
+        keys = ("frames", "true_people", "missed", "false_positives", "id_switches")
+        totals[f"{k}_people"] = {key: sum(r[key] for r in rows) for key in keys}
         totals[f"{k}_people"]["missed_fraction"] = round(totals[f"{k}_people"]["missed"] / totals[f"{k}_people"]["true_people"], 4)
     out = {
         "benchmark": "scene_pipeline",
@@ -112,7 +113,8 @@ def main(argv: list[str] | None = None) -> int:
     path = args.out
     path.write_text(json.dumps(out, indent=1) + "\n")
     for r in timings:
-        print(f"{r['people']} people: " + ", ".join(f"{k} {v['median_ms']}/{v['p99_ms']}" for k, v in r["stages"].items()) + " ms (median/p99)")
+        stages = ", ".join(f"{k} {v['median_ms']}/{v['p99_ms']}" for k, v in r["stages"].items())
+        print(f"{r['people']} people: {stages} ms (median/p99)")
     for k, v in totals.items():
         print(k, v)
     print(f"wrote {path}")

@@ -224,7 +224,8 @@ def main(argv: list[str] | None = None) -> int:
     by_people = {f"{k}_people": summarise([r for r in all_rows if r["true"] == k]) for k in (1, 2, 3)}
     alone = [r for r in all_rows if r["true"] == 1]
     by_activity = {a: summarise([r for r in alone if r["activity"] == a]) for a in sorted({r["activity"] for r in alone})}
-    out = {"benchmark": "scene_quality", "command": " ".join(["OMP_NUM_THREADS=1 python bench/scene_quality.py", *(sys.argv[1:] if argv is None else argv)]),
+    command = " ".join(["OMP_NUM_THREADS=1 python bench/scene_quality.py", *(sys.argv[1:] if argv is None else argv)])
+    out = {"benchmark": "scene_quality", "command": command,
            "machine": describe(), "method": __doc__.split("\n\n", 2)[2].strip(),
            "by_people": by_people, "alone_by_activity": by_activity, "scenes": scenes,
            "scene_step_ms": {"median": round(float(np.median(all_times)), 3), "p99": round(float(np.percentile(all_times, 99)), 3)}}

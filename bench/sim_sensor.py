@@ -22,7 +22,6 @@ from bench import machine  # noqa: E402
 from sim.sensor import CarpetSensor  # noqa: E402
 
 
-
 def time_frames(sensor: CarpetSensor, repeats: int = 7, frames: int = 100) -> dict:
     p = np.zeros(sensor.shape)
     p[30:55, 20:30] = 30.0

@@ -74,7 +74,8 @@ class DriftConfig(StrictConfig):
     rail_margin_counts: float = _f(2.0, "a reading within this of a rail code counts as at the rail")
     dead_fraction: float = _f(0.05, "a line is dead when it sees at most this fraction of the contacts of both neighbours ...")
     dead_min_events: int = _f(40, "... each of which saw at least this many contact sensel-updates in the window")
-    dead_min_straddles: int = _f(5, "... and contacts straddled the quiet lines (the lines on both sides touched at the same place and time) this often")
+    dead_min_straddles: int = _f(5, "... and contacts straddled the quiet lines (the lines on both sides touched at the "
+                                    "same place and time) this often")
     dead_max_run: int = _f(12, "at most this many adjacent quiet lines are judged together (a foot must be able to straddle them)",
                            at_least_one)
     activity_window_s: float = _f(600.0, "contacts per line are counted over windows this long")

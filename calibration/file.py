@@ -293,5 +293,6 @@ class Calibration:
             raise CalibrationError(f"{path}: its metadata lacks or mistypes a field ({type(exc).__name__}: {exc}); "
                                    "recalibrate with `cavatar calibrate`") from None
         if cal.shape != (meta["device"]["rows"], meta["device"]["cols"]):
-            raise CalibrationError(f"{path}: arrays are {cal.shape}, the device record says {meta['device']['rows']}×{meta['device']['cols']}")
+            raise CalibrationError(f"{path}: arrays are {cal.shape}, the device record says "
+                                   f"{meta['device']['rows']}×{meta['device']['cols']}")
         return cal

@@ -21,7 +21,6 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
-
 _WRITES = itertools.count()  # one temporary name per write: two threads may write the same target at once
 
 

@@ -160,6 +160,7 @@ class FrameAssembler:
     def _finish(self, expected_crc: int | None, end_t_us: int) -> list[RawFrame]:
         seq, rows, packing = self._cur_seq, self._rows, self._packing
         self._cur_seq, self._rows, self._packing = None, {}, None
+        assert seq is not None and packing is not None  # called only inside a frame (its first ROW set both)
         if expected_crc is None:  # never emitted unchecked
             self.counters["missing_frame_end"] += 1
             return []
@@ -205,7 +206,7 @@ class FrameAssembler:
             self._index = 0
         self._last_seq = seq
         host_s = self._clock()
-        if self._t_last_us is not None:
+        if self._t_last_us is not None and self._host_last_s is not None:  # set together
             dt = (t_us - self._t_last_us) % U32
             # A restarted device restarted its clock too, and "more than half a wrap forward" is
             # a clock that stepped back unless the host saw that long pass: taken at face value

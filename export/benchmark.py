@@ -156,8 +156,8 @@ def pareto_front(points: list[tuple[float, float]]) -> list[int]:
 # ---------------------------------------------------------------------------------------------- inputs
 def person_frames(grid: tuple[int, int], pitch_m: float, n: int = 32, seed: int = 0) -> tuple[np.ndarray, str]:
     """(n,1,H,W) normalised model inputs of one simulated moving person on this carpet, and what they are."""
-    from edge.infer.normalise import normalise_kpa
     from edge.infer.model_input import person_pressure_kpa
+    from edge.infer.normalise import normalise_kpa
 
     try:
         from sim.live import LiveCarpet

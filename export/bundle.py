@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from edge.infer.bundle import SCHEMA, seal_manifest, write_manifest
 from cavatar_common.provenance import git_revision, sha256_file
+from edge.infer.bundle import SCHEMA, seal_manifest, write_manifest
 from edge.infer.normalise import NORMALISATION
 from export.model import OUTPUT_SIZES, OUTPUTS, ModelConfig
 
@@ -105,35 +105,39 @@ def build_bundle(checkpoint: str | Path, data: str | Path, out: str | Path, name
                  calib_frames: int = 256, frame_stride: int = 2, seed: int = 0, max_eval_tracks: int | None = None) -> dict:
     """Checkpoint → fp32 ONNX (+ parity) → int8 (+ gate on the val split) → bundle, then the bundle as the
     board loads it on the test split beside the mean-pose baseline. Returns the report written in the manifest."""
+    import torch
+
     from edge.body import BodyModel
     from export.data import load_tracks
     from export.train import load_model
     from sim.dataset import Dataset
 
-    import torch
-
     ck = torch.load(checkpoint, map_location="cpu", weights_only=False)
     net = load_model(checkpoint)
     ds = Dataset(data)
     pitch = float(ds.manifest["pitch_m"])
-    val = load_tracks(ds, "val") or load_tracks(ds, "test")
+    tc = ck.get("train_config", {})
+    board = tc.get("input", "clean") == "board"  # calibrate, gate and score on what the run trained on
+    val = load_tracks(ds, "val", board=board) or load_tracks(ds, "test", board=board)
     if max_eval_tracks:
         val = val[:max_eval_tracks]
-    tc = ck.get("train_config", {})
     training = {"data": tc.get("data", str(data)), "dataset_schema": ds.manifest.get("schema"),
                 "dataset_settings": ds.manifest.get("settings"), "dataset_git_revision": ds.manifest.get("git_revision"),
-                "frames": len(ds), "subjects": {s: [x["subject_id"] for x in ds.subjects if x["split"] == s] for s in ("train", "val", "test")},
-                "steps": int(ck["step"]), **{k: tc.get(k) for k in ("stage", "init", "batch", "chunks", "lr", "weight_decay", "optimizer", "seed")}}
+                "frames": len(ds),
+                "subjects": {s: [x["subject_id"] for x in ds.subjects if x["split"] == s] for s in ("train", "val", "test")},
+                "steps": int(ck["step"]),
+                **{k: tc.get(k) for k in ("input", "stage", "init", "batch", "chunks", "lr", "weight_decay", "optimizer", "seed")}}
     split = "val" if load_tracks(ds, "val", max_tracks=1) else "test"
     report = bundle_from_net(net, out, name, pitch_m=pitch, rate_hz=float(ds.manifest.get("rate_hz", 14.0)),
-                             calib_tracks=load_tracks(ds, "train", max_tracks=8), gate_tracks=val, gate_split=split,
+                             calib_tracks=load_tracks(ds, "train", max_tracks=8, board=board), gate_tracks=val,
+                             gate_split=split,
                              training=training, precision=precision, calib_frames=calib_frames, frame_stride=frame_stride, seed=seed)
-    test = load_tracks(ds, "test")
+    test = load_tracks(ds, "test", board=board)
     if test:  # the shipped bundle itself (as the board loads it) on subjects never seen in training
         body = BodyModel.load(net.cfg.body_model)
         metrics = report["metrics"]
         metrics["test"] = bundle_metrics(out, test, pitch, body, frame_stride=frame_stride)
-        train = load_tracks(ds, "train")
+        train = load_tracks(ds, "train", board=board)
         metrics["test"]["baseline_mean_pose_mpjpe_cm"] = mean_pose_baseline_cm(train, test)
         update_manifest(out, metrics=metrics, baseline=baseline_pose(train))
         report["test"] = metrics["test"]
@@ -145,7 +149,7 @@ def bundle_from_net(net, out: str | Path, name: str, *, pitch_m: float, rate_hz:
                     frame_stride: int = 2, seed: int = 0) -> dict:
     """A torch CAvatarNet → fp32 ONNX (parity) → int8 (gate on ``gate_tracks``) → bundle with its weights."""
     from edge.body import BodyModel
-    from export.data import TRAINING_INPUT
+    from export.data import TRAINING_INPUT, TRAINING_INPUT_BOARD
     from export.evaluate import track_inputs
     from export.onnx_export import export_onnx, parity
     from export.quantize import quantize_and_gate
@@ -173,8 +177,9 @@ def bundle_from_net(net, out: str | Path, name: str, *, pitch_m: float, rate_hz:
                    "latency_1_thread_ms": report["latency_1_thread"]}
         quant = {k: v for k, v in report.items() if k not in ("encoder", "head")}
         weights = {k: v.detach().cpu().numpy() for k, v in net.state_dict().items()}
+        described = TRAINING_INPUT_BOARD if training.get("input") == "board" else TRAINING_INPUT
         write_bundle(out, enc, head, cfg, name=name, pitch_m=pitch_m, rate_hz=rate_hz, body_model=cfg.body_model,
-                     training={**training, "input": TRAINING_INPUT}, metrics=metrics, quantization=quant, weights=weights)
+                     training={**training, "input": described}, metrics=metrics, quantization=quant, weights=weights)
     report["metrics"] = metrics
     return report
 

@@ -41,7 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--threads", type=int, default=0, help="torch threads (default: torch's choice)")
     t.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     t.add_argument("--cache-copies", type=int, default=2,
-                   help="--stage head: feature-cache copies of every frame, copy c turned by c quarter turns (default 2; 4 sees every heading)")
+                   help="--stage head: feature-cache copies of every frame, copy c turned by c quarter turns "
+                        "(default 2; 4 sees every heading)")
+    t.add_argument("--input", default="clean", choices=("clean", "board"),
+                   help="clean (default): the simulator's true pressure through the training corruption; board: the raw "
+                   "counts through each carpet's calibration, as a board reads them (datasets generated with "
+                   "`cavatar sim generate --calibration installer`)")
     t.add_argument("--no-turns", action="store_true", help="do not turn the carpet by random quarter turns (frames, head stages)")
     t.add_argument("--exclude-activity", action="append", default=[], metavar="NAME",
                    help="never train on this activity (leave-one-activity-out); repeatable")
@@ -148,7 +153,8 @@ def run_train(args: argparse.Namespace) -> int:
     except (TypeError, ValueError) as exc:
         raise CliError(str(exc)) from None
     cfg = TrainConfig(data=args.data, out=args.out, stage=args.stage, init=args.init, exclude_activities=args.exclude_activity,
-                      cache_copies=args.cache_copies, turns=not args.no_turns, steps=args.steps, batch=args.batch, chunks=args.chunks, lr=args.lr, lr_schedule=args.lr_schedule,
+                      cache_copies=args.cache_copies, input=args.input, turns=not args.no_turns, steps=args.steps,
+                      batch=args.batch, chunks=args.chunks, lr=args.lr, lr_schedule=args.lr_schedule,
                       weight_decay=args.weight_decay, optimizer=args.optimizer, seed=args.seed, checkpoint_every=args.checkpoint_every,
                       val_every=args.val_every, device=args.device, threads=args.threads)
     from sim.dataset import DatasetError
@@ -233,7 +239,8 @@ def run_eval(args: argparse.Namespace) -> int:
     result["setup"] = {"bundle": f"{manifest['name']}@{manifest['files']['encoder.onnx'][:12]}", "data": args.data,
                        "split": split, "protocol": PROTOCOLS[args.protocol], "people": args.people or "all",
                        "input": args.input,
-                       "heading": "model alone" if args.no_resolve_heading else f"resolved from the feet ({heading_file or 'edge/infer/heading.json'})",
+                       "heading": ("model alone" if args.no_resolve_heading
+                                   else f"resolved from the feet ({heading_file or 'edge/infer/heading.json'})"),
                        "frame_stride": args.stride,
                        "tracks": len(tracks), "subjects": sorted({f"s{t.subject:02d}" for t in tracks}),
                        "baseline": "mean training pose at the centre of pressure" if baseline else "none (bundle has no baseline)",

@@ -11,7 +11,10 @@ counts through each carpet's calibration, for datasets generated with ``--calibr
 Several people: the generator's pressure is the sum over people. Each person gets their own
 input: a loaded sensel belongs to the person whose nearest joint ground projection is
 closest, dilated by 2 sensels and limited to that person (a runtime gets the same from
-edge.scene's per-person masks). A single person's input is the whole frame.
+edge.scene's per-person masks). A single person's input is the whole frame of true pressure;
+on the board's path every person, alone or not, is masked to the true load's footprint grown by
+2 sensels (the runtime's mask: contacts grown by mask_margin_mm, 40 mm), so what a faulty line or a
+drifting tile reads far from anyone never reaches the model, as at runtime.
 """
 
 from __future__ import annotations
@@ -27,8 +30,9 @@ TRAINING_INPUT = ("true pressure_kpa with sensor corruption: gain ×U(0.85,1.15)
                   "noise σ 0.1 kPa, floor 0.2 kPa → 0, saturation at 14 kPa; other people masked out by nearest-joint "
                   "assignment of loaded sensels (dilated 2 sensels)")
 TRAINING_INPUT_BOARD = ("the board's path: raw sensor-model counts (per-carpet gains, curve, crosstalk, hysteresis, "
-                        "saturation, faults, noise) through each carpet's calibration (calibration.apply), other people "
-                        "masked out as above")
+                        "saturation, faults, noise) through each carpet's calibration (calibration.apply), floored at "
+                        "0.2 kPa and clipped at 14 kPa as the runtime does, gain ×U(0.92,1.08); each person masked to "
+                        "the true load's footprint grown by 2 sensels (nearest-joint assignment between people)")
 
 
 @dataclass
@@ -78,6 +82,19 @@ def person_masks(pressure_kpa: np.ndarray, joints_m: np.ndarray, present: np.nda
     return masks
 
 
+def footprint_masks(true_kpa: np.ndarray, joints_m: np.ndarray, present: np.ndarray, pitch_m: float,
+                    floor_kpa: float = 0.2, dilate: int = 2) -> np.ndarray:
+    """(H,W) true pressure, (P,24,3) joints, (P,) present → (P,H,W) bool: each person's loaded sensels
+    (nearest-joint assignment between several) grown by ``dilate`` sensels — alone too, unlike person_masks."""
+    people = np.flatnonzero(present)
+    if len(people) > 1:
+        return person_masks(true_kpa, joints_m, present, pitch_m, floor_kpa, dilate)
+    masks = np.zeros((len(present),) + true_kpa.shape, bool)
+    if len(people):
+        masks[people[0]] = ndimage.binary_dilation(true_kpa > floor_kpa, iterations=dilate)
+    return masks
+
+
 def load_tracks(dataset, split: str, max_tracks: int | None = None, board: bool = False) -> list[Track]:
     """All person tracks of a split (a ``sim.dataset.Dataset`` or its path); contiguous present runs.
 
@@ -97,11 +114,15 @@ def load_tracks(dataset, split: str, max_tracks: int | None = None, board: bool 
             rows = np.flatnonzero(shard["sequence"] == seq)
             present = shard["present"][rows]
             pressure = source[rows].astype(np.float32)
-            multi = present.sum(1) > 1
             own = np.repeat(pressure[:, None], present.shape[1], 1)
-            for i in np.flatnonzero(multi):
-                m = person_masks(pressure[i], shard["joints_m"][rows[i]], present[i], pitch)
-                own[i] = pressure[i] * m
+            if board:  # masked to where the truth loads, as the runtime's scene masks a person
+                truth = shard["pressure_kpa"][rows].astype(np.float32)
+                for i in range(len(rows)):
+                    own[i] = pressure[i] * footprint_masks(truth[i], shard["joints_m"][rows[i]], present[i], pitch)
+            else:
+                for i in np.flatnonzero(present.sum(1) > 1):
+                    m = person_masks(pressure[i], shard["joints_m"][rows[i]], present[i], pitch)
+                    own[i] = pressure[i] * m
             for p in range(present.shape[1]):
                 for start, stop in _runs(present[:, p]):
                     r = rows[start:stop]
@@ -151,6 +172,24 @@ def corrupt(pressure_kpa, rng: np.random.Generator):
     q = torch.where(loaded, p * gain * sensel + noise, torch.zeros_like(p))
     q = torch.where(q < 0.2, torch.zeros_like(q), q)
     return q.clamp(max=SATURATION_KPA)
+
+
+def training_input(pressure_kpa, rng: np.random.Generator, board: bool = False):
+    """(N,H,W) kPa of one track → the model's training input (torch, kPa) for that track's kind.
+
+    A true-pressure track goes through ``corrupt`` (TRAINING_INPUT). A board's-path track (already the
+    sensor model's counts through a calibration) is floored and clipped as the runtime does
+    (edge.infer.model_input) after one global gain ×U(0.92, 1.08), which spans more calibrations than a
+    dataset's few carpets while keeping every label exact."""
+    import torch
+
+    if not board:
+        return corrupt(pressure_kpa, rng)
+    from edge.infer.model_input import FLOOR_KPA
+
+    p = torch.as_tensor(pressure_kpa, dtype=torch.float32) * float(rng.uniform(0.92, 1.08))
+    p = torch.where(p < FLOOR_KPA, torch.zeros_like(p), p)
+    return p.clamp(max=SATURATION_KPA)
 
 
 def chunk_indices(length: int, start: int, frames: int) -> np.ndarray:

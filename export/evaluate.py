@@ -139,10 +139,9 @@ def bundle_callables(folder: str | Path):
     from export.model.heads import OUTPUTS
 
     b = ModelBundle.load(folder)
-    names = [o.name for o in b._head.get_outputs()]
 
     def head(w):
-        out = dict(zip(names, b._head.run(None, {b._head_name: np.ascontiguousarray(w, np.float32)})))
+        out = b.head_outputs(w)
         return {k: out[k] for k in OUTPUTS}
 
     return b.encode, head, b.window

@@ -63,7 +63,7 @@ def finetune(bundle: str | Path, data: str | Path, fraction: float, out: str | P
     a sweep over fractions is judged on one held-out set (frames between the two are unused)."""
     import tempfile
 
-    from export.bundle import update_manifest, bundle_from_net, load_net
+    from export.bundle import bundle_from_net, load_net, update_manifest
     from export.train import TrainConfig, Trainer
 
     net, manifest = load_net(bundle)
@@ -90,7 +90,8 @@ def finetune(bundle: str | Path, data: str | Path, fraction: float, out: str | P
     name = f"{manifest['name']}-ft{int(round(100 * fraction))}"
     training = {"finetuned_from": source, "data": str(data), "split": split, "subjects": subjects or "all",
                 "fraction": fraction, "steps": steps if fraction > 0 else 0, "lr": lr, "stage": stage, "seed": seed,
-                "held_out_from": start, "frames_trained": int(sum(len(t) for t in train)), "frames_held_out": int(sum(len(t) for t in held_out))}
+                "held_out_from": start, "frames_trained": int(sum(len(t) for t in train)),
+                "frames_held_out": int(sum(len(t) for t in held_out))}
     report = bundle_from_net(net, out, name, pitch_m=pitch, rate_hz=float(ds.manifest.get("rate_hz", 14.0)),
                              calib_tracks=(train or held_out)[:8], gate_tracks=held_out, gate_split="held-out (time split)",
                              training=training, precision=precision, seed=seed)

@@ -54,9 +54,8 @@ def predictions(tracks: list[Track], bundle: str | Path, pitch_m: float, seed: i
     runtime only floors and clips (edge.infer.model_input); otherwise the training corruption."""
     from edge.infer import verify
     from edge.infer.model_input import input_limits, person_pressure_kpa
-    from export.evaluate import bundle_callables
     from export.data import corrupt
-    from export.evaluate import predict
+    from export.evaluate import bundle_callables, predict
 
     encode, head, window = bundle_callables(bundle)
     floor, sat = input_limits(verify(bundle))
@@ -154,12 +153,14 @@ def main(argv: list[str] | None = None) -> int:
     after = min(r["wrong_90"] for r in tried)
     result = {"params": params.to_dict(), "activity_weight": weights,
               "fit": {"bundle": str(args.bundle), "data": str(args.data), "dataset_settings": ds.manifest.get("settings"),
-                      "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split, "input": "board" if args.board else "clean",
+                      "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split,
+                      "input": "board" if args.board else "clean",
                       "tracks": len(tracks),
                       "frames": int(sum(len(t) for t in tracks)), "wrong_90_model": before, "wrong_90_resolved": after,
                       "grid": {k: list(v) for k, v in grid.items()}}}
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
-    print(f"heading >90° off: model {100 * before:.1f} % → resolved {100 * after:.1f} % of {result['fit']['frames']} frames; wrote {args.out}")
+    print(f"heading >90° off: model {100 * before:.1f} % → resolved {100 * after:.1f} % of {result['fit']['frames']} "
+          f"frames; wrote {args.out}")
     return 0
 
 

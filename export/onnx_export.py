@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from export.model import CAvatarNet, OUTPUTS
+from export.model import OUTPUTS, CAvatarNet
 
 ENCODER_INPUT, ENCODER_OUTPUT, HEAD_INPUT = "pressure", "features", "features"
 OPSET = 20

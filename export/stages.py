@@ -27,7 +27,7 @@ import numpy as np
 import torch
 
 from edge.infer.normalise import center_of_pressure_m
-from export.data import Track, chunk_indices, corrupt
+from export.data import Track, chunk_indices, training_input
 
 STAGES = ("windows", "frames", "head")
 
@@ -90,7 +90,7 @@ def sample_frames(tracks: list[Track], weights: np.ndarray, n: int, pitch_m: flo
         tr = tracks[int(ti)]
         f = np.array([int(rng.integers(len(tr)))])
         k = int(rng.integers(4)) if turns else 0
-        p = corrupt(turn_frames(tr.pressure_kpa[f].astype(np.float32), k), rng)
+        p = training_input(turn_frames(tr.pressure_kpa[f].astype(np.float32), k), rng, tr.board)
         xs.append(torch.log1p(p))                                               # NORMALISATION (log1p, 1 kPa)
         parts.append(_targets(tr, f, center_of_pressure_m(p.numpy(), pitch_m), k, side_m))
     return {"x": torch.cat(xs)[:, None].to(device), **_stack(parts, device)}
@@ -115,7 +115,7 @@ class FeatureCache:
                 fc, cc = [], []
                 for i, tr in enumerate(tracks):
                     rng = np.random.default_rng([seed, c, i])
-                    p = corrupt(turn_frames(tr.pressure_kpa.astype(np.float32), c if turns else 0), rng)
+                    p = training_input(turn_frames(tr.pressure_kpa.astype(np.float32), c if turns else 0), rng, tr.board)
                     x = torch.log1p(p)[:, None]
                     fc.append(np.concatenate([encoder(x[s:s + batch].to(device)).cpu().numpy() for s in range(0, len(x), batch)]))
                     cc.append(center_of_pressure_m(p.numpy(), pitch_m))

@@ -38,7 +38,8 @@ def sweep(bundle: str, data: str, subjects: list[str], fractions: list[float], s
             print(f"{subject} fraction {f:.0%}: held-out MPJPE {report['metrics']['mpjpe_cm']:.2f} cm", file=sys.stderr, flush=True)
     mean = {k: float(np.mean([rows[s][k] for s in subjects])) for k in rows[subjects[0]]}
     return {"setup": {"bundle": bundle, "data": data, "split": split, "subjects": subjects, "fractions": fractions,
-                      "held_out": f"the last {1 - held_from:.0%} of every track", "steps": steps, "stage": stage, "lr": lr, "precision": precision},
+                      "held_out": f"the last {1 - held_from:.0%} of every track", "steps": steps, "stage": stage, "lr": lr,
+                      "precision": precision},
             "mpjpe_cm": rows, "mean_mpjpe_cm": mean}
 
 
@@ -69,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="bundles judged in fp32 (default: the effect of fine-tuning alone) or int8 (each must pass the gate)")
     p.add_argument("--out", required=True, help="output prefix: OUT.json, OUT.md")
     a = p.parse_args(argv)
-    result = sweep(a.bundle, a.data, a.subject, [float(x) for x in a.fractions.split(",")], a.steps, a.stage, a.split, a.threads, a.lr, a.precision)
+    fractions = [float(x) for x in a.fractions.split(",")]
+    result = sweep(a.bundle, a.data, a.subject, fractions, a.steps, a.stage, a.split, a.threads, a.lr, a.precision)
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(result, indent=1) + "\n")

@@ -137,7 +137,8 @@ def summarise(model: dict[str, np.ndarray], baseline: dict[str, np.ndarray] | No
     if baseline is not None:
         out["baseline"] = _stats(baseline, every)
         out["overall"]["mpjpe_vs_baseline"] = out["overall"]["mpjpe_cm"] / out["baseline"]["mpjpe_cm"]
-    name = {"activity": lambda v: ACTIVITIES[int(v)], "subject": lambda v: f"s{int(v):02d}", "people": lambda v: "1 person" if int(v) == 1 else f"{int(v)} people"}
+    name = {"activity": lambda v: ACTIVITIES[int(v)], "subject": lambda v: f"s{int(v):02d}",
+            "people": lambda v: "1 person" if int(v) == 1 else f"{int(v)} people"}
     for g in GROUPS:
         rows = {}
         for v in np.unique(model[g]):
@@ -172,7 +173,8 @@ def markdown(result: dict[str, Any], title: str) -> str:
     """The tables of :func:`summarise` in Markdown (cm, degrees, % of frames)."""
     lines = [f"## {title}", ""]
     o = result["overall"]
-    lines += ["| " + METRIC_HEADER, "|---" * 10 + "|", _row(["model" + (" (heading resolved)" if "model_mpjpe_cm" in o else "")] + metric_cells(o))]
+    model = "model" + (" (heading resolved)" if "model_mpjpe_cm" in o else "")
+    lines += ["| " + METRIC_HEADER, "|---" * 10 + "|", _row([model] + metric_cells(o))]
     if "model_mpjpe_cm" in o:
         lines.append(_row(["model alone (heading not resolved)"] + metric_cells(o, "model_")))
     if "baseline" in result:

@@ -45,6 +45,7 @@ class TrainConfig:
     stage: str = "windows"          # "frames", "head" or "windows" (export/stages.py)
     init: str = ""                  # checkpoint whose model (and frame head) weights start this run
     cache_copies: int = 2           # stage "head": corruption copies of every frame in the feature cache (copy c turned c·90°)
+    input: str = "clean"            # "clean": true pressure through export.data.corrupt; "board": the board's path
     turns: bool = True              # turn the carpet by random quarter turns (frames, head stages; export/stages.py)
     exclude_activities: list[str] = field(default_factory=list)  # leave-one-activity-out: these never train
     steps: int = 5000
@@ -87,6 +88,8 @@ class Trainer:
 
         if cfg.stage not in STAGES:
             raise ValueError(f"stage must be one of {STAGES}, got {cfg.stage!r}")
+        if cfg.input not in ("clean", "board"):
+            raise ValueError(f"input must be 'clean' or 'board', got {cfg.input!r}")
         if cfg.lr_schedule not in ("constant", "cosine"):
             raise ValueError(f"lr_schedule must be 'constant' or 'cosine', got {cfg.lr_schedule!r}")
         self.cfg = cfg
@@ -108,8 +111,9 @@ class Trainer:
         if self.model_cfg.grid != grid:
             self.model_cfg = ModelConfig.from_dict({**self.model_cfg.to_dict(), "grid": list(grid)})
         cfg.model = self.model_cfg.to_dict()
-        self.tracks = tracks if tracks is not None else [t for d in datasets for t in load_tracks(d, "train")]
-        self.val_tracks = val_tracks if val_tracks is not None else load_tracks(ds, "val")
+        board = cfg.input == "board"
+        self.tracks = tracks if tracks is not None else [t for d in datasets for t in load_tracks(d, "train", board=board)]
+        self.val_tracks = val_tracks if val_tracks is not None else load_tracks(ds, "val", board=board)
         if cfg.exclude_activities:
             from export.data import without_activities
 
@@ -195,14 +199,14 @@ class Trainer:
     def sample_chunk(self) -> dict[str, torch.Tensor]:
         """One chunk: B+T-1 frames of one track → inputs (N,1,H,W) and targets of the B windows."""
         from edge.infer.normalise import center_of_pressure_m
-        from export.data import chunk_indices, corrupt
+        from export.data import chunk_indices, training_input
 
         t, b = self.model_cfg.window, self.cfg.batch
         tr = self.tracks[int(self.rng.choice(len(self.tracks), p=self.weights))]
         n = b + t - 1
         start = int(self.rng.integers(-(t - 1), max(len(tr) - n, -(t - 1)) + 1))
         idx = chunk_indices(len(tr), start, n)
-        p = corrupt(tr.pressure_kpa[idx].astype(np.float32), self.rng)            # (N,H,W) kPa
+        p = training_input(tr.pressure_kpa[idx].astype(np.float32), self.rng, tr.board)  # (N,H,W) kPa
         x = torch.log1p(p)[:, None]                                              # NORMALISATION (log1p, 1 kPa)
         tgt = idx[t - 1:]                                                        # the windows' target frames
         cop = center_of_pressure_m(p[t - 1:].numpy(), self.pitch_m)

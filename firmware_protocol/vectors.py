@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator
 
-from firmware_protocol import codec, cobs, generated
+from firmware_protocol import cobs, codec, generated
 
 VECTORS_PATH = Path(__file__).with_name("vectors") / "vectors.jsonl"
 P = codec.PACKING

@@ -208,7 +208,8 @@ class VirtualBoard:
 
         row_bytes = 18 + codec.packed_size(cols, self.packing)
         if row_bytes > codec.SPEC.max_packet_bytes:
-            raise ValueError(f"a ROW of {cols} samples in {packing_name} takes {row_bytes} bytes > max_packet_bytes={codec.SPEC.max_packet_bytes}")
+            raise ValueError(f"a ROW of {cols} samples in {packing_name} takes {row_bytes} bytes "
+                             f"> max_packet_bytes={codec.SPEC.max_packet_bytes}")
         self.frame_wire_bytes = rows * _wire_len(row_bytes) + _wire_len(23)
         self.scan_time_s = rows * self.row_time_us * 1e-6
         limits = [max_rate_hz, 1.0 / self.scan_time_s]

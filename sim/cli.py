@@ -80,7 +80,8 @@ def run_generate(args: argparse.Namespace) -> int:
 def run_audit(args: argparse.Namespace) -> int:
     import sys
 
-    from sim.audit import run_audit as audit, write_report
+    from sim.audit import run_audit as audit
+    from sim.audit import write_report
 
     if args.subjects < 1 or args.seconds < 6:
         raise CliError("--subjects must be at least 1 and --seconds at least 6 (the floor activities need the time)")

@@ -25,7 +25,7 @@ def sheet(activity: str, out: Path, seed: int = 2, seconds: float = 6.0) -> Path
 
     from edge.body import BodyModel
     from edge.body.render import draw_view
-    from sim.contact import ContactModel, mesh_centroid_m, subject_mass_kg, regional_tissue
+    from sim.contact import ContactModel, mesh_centroid_m, regional_tissue, subject_mass_kg
     from sim.motion import Subject, person_track
 
     body = BodyModel.load("lite")

@@ -37,6 +37,7 @@ import zipfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -130,7 +131,7 @@ class _SmplUnpickler(pickle.Unpickler):
 def _plain(value, key: str, where: str):
     """A pickled value (ndarray, chumpy stub, sparse stub, list) → ndarray."""
     if isinstance(value, _ChumpyStub):
-        state = getattr(value, "state", None)
+        state: Any = getattr(value, "state", None)
         if not isinstance(state, dict) or "x" not in state:
             raise BodyModelFileError(
                 f"{where}: key {key!r} is a chumpy expression ({value.chumpy_class}), not a plain "

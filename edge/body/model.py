@@ -123,7 +123,8 @@ class BodyModel:
         if nonfinite == "zero":
             warnings.warn(f"{name}: {int(bad.sum())} non-finite value(s) replaced by 0 (first at {where})", BodyModelWarning, stacklevel=4)
             return np.where(bad, 0.0, value)
-        raise ValueError(f"{name} contains {int(bad.sum())} non-finite value(s) (first at index {where}); pass nonfinite='zero' to zero them")
+        raise ValueError(f"{name} contains {int(bad.sum())} non-finite value(s) (first at index {where}); "
+                         "pass nonfinite='zero' to zero them")
 
     def prepare_inputs(self, pose_aa, betas=None, transl_m=None, nonfinite: str = "raise"):
         """Check, broadcast and sanitise inputs → (pose (B,J,3), betas (B,NB), transl (B,3)), float64."""

@@ -72,7 +72,7 @@ def pose_aa(name: str) -> np.ndarray:
         raise ValueError(f"unknown pose {name!r}; known: {', '.join(POSES)}")
     orient, joints = POSES[name]
     out = np.zeros((len(SMPL_JOINT_NAMES), 3))
-    out[0] = euler_xyz_deg_to_axis_angle(orient)
+    out[0] = euler_xyz_deg_to_axis_angle(np.asarray(orient))
     for joint, deg in joints.items():
-        out[SMPL_JOINT_NAMES.index(joint)] = euler_xyz_deg_to_axis_angle(deg)
+        out[SMPL_JOINT_NAMES.index(joint)] = euler_xyz_deg_to_axis_angle(np.asarray(deg))
     return out.reshape(-1)

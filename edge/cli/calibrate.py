@@ -21,14 +21,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 STEP_FILES = ("empty", "walk", "board", "stance", "holdout")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "calibrate",
+        command_name(__name__),
         help="calibrate a carpet: baseline, faults, gains, response curve; writes the calibration file and a report",
         description="Walks an installer through the calibration steps (self-test, empty capture, coverage walk, "
         "board equilibration, known-weight poses, validation), from a live board (--source), from recordings "
@@ -69,7 +69,10 @@ def _sim_sensor(seed: int, grid: int):
 
     url = f"sim://?seed={seed}&grid={grid}"
     try:
-        return source_plugin(url).calibration_sensor(source_options(url))
+        plugin = source_plugin(url)
+        if plugin is None:
+            raise ValueError("sim:// is served by no source plug-in here")
+        return plugin.calibration_sensor(source_options(url))
     except (ValueError, SourceError) as exc:
         raise CliError(f"--sim: {exc}") from None
 
@@ -95,8 +98,14 @@ def _provider(args):
 
 def preflight(args: argparse.Namespace, ask=input) -> None:
     """Destination, session folder, recordings, board — then the mass: CliError (one line) at the first problem."""
-    from calibration.preflight import PreflightError, ask_mass, check_board, check_destination, check_recordings, \
-        check_work_folder
+    from calibration.preflight import (
+        PreflightError,
+        ask_mass,
+        check_board,
+        check_destination,
+        check_recordings,
+        check_work_folder,
+    )
 
     try:
         check_destination(Path(args.out))
@@ -140,13 +149,13 @@ def run(args: argparse.Namespace) -> int:
     results = session.all_results()
     out = Path(args.out)
     png, txt = out.with_suffix(".png"), out.with_suffix(".txt")
-    if not write_report(cal, results, val, png, txt):
-        png = "(no PNG: matplotlib is not installed; pip install 'cavatar-edge[viz]' to draw it)"
+    drawn = write_report(cal, results, val, png, txt)
+    report = png if drawn else "(no PNG: matplotlib is not installed; pip install 'cavatar-edge[viz]' to draw it)"
     w = results.get("walk")
     if w is not None and not args.no_map:
         print(render_map(w.arrays["coverage"] > 0, title="coverage map (x = masked)", faults=~cal.usable))
     print(val.summary())
-    print(f"wrote {out} (sha256 {cal.sha256[:12]}), report {png} and {txt}")
+    print(f"wrote {out} (sha256 {cal.sha256[:12]}), report {report} and {txt}")
     return 0 if val.ok else 1
 
 

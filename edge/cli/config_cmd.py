@@ -11,12 +11,12 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "config",
+        command_name(__name__),
         help="validate a runtime configuration file or describe every key",
         description=textwrap.fill(
             "The runtime's TOML configuration is typed: unknown keys and wrong types are refused with the key path; "

@@ -100,7 +100,10 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
     if not records:
         raise ValueError("no record with people to draw")
     url = f"sim://?people={people}&seed={seed}&speed=0"  # the run's carpet, made again for its truth
-    carpet, _ = source_plugin(url).module.open_carpet(source_options(url))
+    plugin = source_plugin(url)
+    if plugin is None:
+        raise ValueError("sim:// is served by no source plug-in here")
+    carpet, _ = plugin.module.open_carpet(source_options(url))
     model = carpet.body  # the body model the simulator and the shipped bundle use
     fig = Figure(figsize=(2.6 * len(records), 6.4), dpi=110)
     FigureCanvasAgg(fig)

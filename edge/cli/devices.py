@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from edge.cli import command_name
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "devices",
+        command_name(__name__),
         help="list serial ports and USB devices that could be the carpet's readout board",
         description="List serial ports (stable /dev/serial/by-id names first) and USB devices. "
         "Boards with our default USB id 1209:CA7A are marked; use the printed URL as --source.",

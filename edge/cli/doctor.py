@@ -14,10 +14,12 @@ from __future__ import annotations
 import argparse
 import json
 
+from edge.cli import command_name
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "doctor",
+        command_name(__name__),
         help="check an installation: packages, configuration, board, calibration, model, sinks (ok / warn / FAIL)",
         description="Checks everything `cavatar run` needs, one line per check (ok, warn or FAIL; a line that is not "
         "ok says what to do): Python and packages, onnxruntime (and that torch is not needed), the configuration, "
@@ -36,9 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from edge.runtime.doctor import FAIL, OK, WARN, as_json, diagnose, exit_code
-
     from edge.runtime.config_choice import choose_config
+    from edge.runtime.doctor import FAIL, OK, WARN, as_json, diagnose, exit_code
 
     choice = choose_config(args.config)
     findings = diagnose(choice.path, open_board=not args.no_open, config_reason=choice.reason)

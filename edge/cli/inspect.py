@@ -7,12 +7,12 @@ import json
 
 import numpy as np
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "inspect",
+        command_name(__name__),
         help="summarise a capture: device INFO, frame count, rate, error counters",
         description="Decode a capture written by `cavatar record` as fast as possible and summarise it.",
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import errno
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 from edge.peripherals import CHIPS, GainControl, TemperatureSensor, chip_kind, open_chip
 
 
@@ -31,7 +31,7 @@ def _chip(kind: type):
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "peripherals", help="read the board's I²C temperature sensor and gain setting",
+        command_name(__name__), help="read the board's I²C temperature sensor and gain setting",
         description="Read the host board's I²C temperature sensor and front-end gain "
                     "potentiometer; optionally set the gain. --fake uses an emulated bus.")
     p.add_argument("--bus", default="1", help="I²C bus number or path (default: 1, /dev/i2c-1)")

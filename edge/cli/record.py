@@ -6,12 +6,12 @@ import argparse
 import os
 import time
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "record",
+        command_name(__name__),
         help="record the raw byte stream of a source to a file",
         description="Record exactly the bytes the board sends (INFO first) until N whole frames have "
         "arrived. The file is written beside its final name and renamed when complete, so an "

@@ -16,11 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("render", help="draw the bodies of a published record to PNG", description=__doc__.split("\n\n")[0])
+    p = subparsers.add_parser(command_name(__name__), help="draw the bodies of a published record to PNG",
+                              description=__doc__.split("\n\n")[0])
     p.add_argument("record", type=Path, help="a .json record or a .jsonl file of records")
     p.add_argument("--png", type=Path, required=True, help="output PNG path")
     p.add_argument("--index", type=int, default=None, help="which record of a JSON-lines file (default 0; -1 is the last)")
@@ -85,8 +86,8 @@ def people_arrays(record: dict, num_joints: int = 24):
         transls.append(transl)
         ids.append(person.get("track_id", k))
     width = max(len(b) for b in betas)
-    betas = np.stack([np.pad(b, (0, width - len(b))) for b in betas]) if width else None
-    return np.stack(poses), betas, np.stack(transls), ids
+    padded = np.stack([np.pad(b, (0, width - len(b))) for b in betas]) if width else None
+    return np.stack(poses), padded, np.stack(transls), ids
 
 
 def run(args) -> int:

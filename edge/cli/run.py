@@ -27,14 +27,14 @@ import threading
 import time
 from typing import Any
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 REQUIRE_SINKS_S = 10.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "run",
+        command_name(__name__),
         help="run the edge runtime: carpet → calibrated pressure → people → 3D bodies → MQTT / files",
         description=__doc__.split("\n\n", 1)[1].split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -154,6 +154,7 @@ def serve(cfg: Any, *, quiet: bool = False, runtime: Any = None, require_sinks_s
     try:
         rt.start()
         sinks = ", ".join(redact(u) for u in cfg.sinks.urls)
+        assert rt.bundle is not None  # loaded by setup()
         print(f"cavatar run: {redact(cfg.source.url)} → {sinks}; model {rt.bundle.version}; status "
               f"{cfg.status_path()}{'' if cfg.runtime.seconds <= 0 else f'; stops after {cfg.runtime.seconds:g} s'}"
               f"; Ctrl-C stops{f' ({config_note})' if config_note else ''}", file=sys.stderr, flush=True)

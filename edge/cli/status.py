@@ -10,12 +10,12 @@ from __future__ import annotations
 import argparse
 import json
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "status",
+        command_name(__name__),
         help="print the health of `cavatar run`: frames, drops, people, work saved, ms per stage, sinks",
         description="Reads the status file that `cavatar run` rewrites every second (atomically) and prints it: "
         "frames in and dropped, decoder and frame-assembly drops, invalid frames, work saved, per-stage "

@@ -7,12 +7,12 @@ import time
 
 import numpy as np
 
-from edge.cli import CliError
+from edge.cli import CliError, command_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "stream",
+        command_name(__name__),
         help="read frames from a source and print what arrives, once a second",
         description="Open a source, stream frames through the protocol decoder and frame assembly, "
         "and print a summary each second: frame rate, active sensels, error counters.",

@@ -226,7 +226,8 @@ class ModelBundle:
     # -- properties ---------------------------------------------------------------------------
     @property
     def grid(self) -> tuple[int, int]:
-        return tuple(int(g) for g in self.manifest["grid"])
+        rows, cols = self.manifest["grid"]
+        return int(rows), int(cols)
 
     @property
     def pitch_m(self) -> float:
@@ -274,6 +275,16 @@ class ModelBundle:
         _check_outputs(self.folder / "encoder.onnx", {"features": features})
         return features
 
+    def head_outputs(self, features: np.ndarray) -> dict[str, np.ndarray]:
+        """(B,T,F) features → the head graph's own outputs by name, as exported: rot6d (B,144), betas (B,10),
+        transl_rel_m (B,3), activity_logits (B,12), confidence (B,1) (and any extra output the graph has).
+        :meth:`head` turns them into published parameters; evaluation reads them raw."""
+        w = np.ascontiguousarray(features, np.float32)
+        if w.ndim != 3 or w.shape[1:] != (self.window, self.features):
+            raise ValueError(f"head expects (B,{self.window},{self.features}), got {w.shape}")
+        check_finite(w, "head input (window features)")
+        return dict(zip([o.name for o in self._head.get_outputs()], self._head.run(None, {self._head_name: w})))
+
     def head(self, features: np.ndarray, origin_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """(B,T,F) features → pose_aa (B,72), betas (B,10), transl_m (B,3), transl_rel_m (B,3),
         activity_probs (B,12), confidence (B,).
@@ -281,11 +292,7 @@ class ModelBundle:
         ``transl_m = transl_rel_m + origin_m``; ``origin_m`` (B,3) is :meth:`origin_m` of the
         window's LAST frame (the person's centre of pressure); without it, transl_m = transl_rel_m.
         """
-        w = np.ascontiguousarray(features, np.float32)
-        if w.ndim != 3 or w.shape[1:] != (self.window, self.features):
-            raise ValueError(f"head expects (B,{self.window},{self.features}), got {w.shape}")
-        check_finite(w, "head input (window features)")
-        out = dict(zip([o.name for o in self._head.get_outputs()], self._head.run(None, {self._head_name: w})))
+        out = self.head_outputs(features)
         _check_outputs(self.folder / "head.onnx", {k: out[k] for k in HEAD_OUTPUTS})
         logits = out["activity_logits"].astype(np.float64)
         probs = np.exp(logits - logits.max(-1, keepdims=True))

@@ -297,4 +297,5 @@ def resolve_sequence(pose_aa: np.ndarray, cues: tuple[np.ndarray, np.ndarray], a
     return np.stack([r.decide(pose_aa[t], cue[t], probs[t], bool(on_feet[t])) for t in range(len(pose_aa))]).astype(np.float32)
 
 
-__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad", "foot_votes", "frame_cue", "turn_half", "upright_z", "yaw_rad"]
+__all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad",
+           "foot_votes", "frame_cue", "turn_half", "upright_z", "yaw_rad"]

@@ -107,9 +107,11 @@ class PeopleInference:
             except Exception:
                 self.tracks.keep_only(set(self.tracks.tracks) - set(opened))  # no half-opened window: reopened next frame
                 raise
+        step.results = []
         for st in states:
             st.frames += 1
-        step.results = [st.result for st in states]
+            assert st.result is not None  # every track ran the model this frame or reuses its last result
+            step.results.append(st.result)
         return step
 
     # ------------------------------------------------------------------ the model
@@ -140,6 +142,7 @@ class PeopleInference:
         poses = []
         for i, (person, st) in enumerate(run):
             kpa = person_pressure_kpa(filled_kpa, person.mask, floor, sat)  # what the model saw
+            assert st.heading is not None  # every track has a resolver when resolve_heading is on
             before = st.heading.flips
             poses.append(st.heading.resolve(out["pose_aa"][i], kpa, self._pitch_m, out["activity_probs"][i]))
             step.work["heading_turned"] += st.heading.flips - before
@@ -151,6 +154,7 @@ class PeopleInference:
         t0 = time.perf_counter()
         feats = self.bundle.encode(x)
         t1 = time.perf_counter()
+        assert self._idle_window is not None  # made when adaptive is off, the only caller
         self._idle_window.push(feats[0])
         self.bundle.head(self._idle_window.window(), origins)
         step.encoder_ms, step.head_ms = (t1 - t0) * 1e3, (time.perf_counter() - t1) * 1e3

@@ -77,30 +77,9 @@ def _source_url(v: str) -> str | None:
 
 def check_sink_url(url: str) -> str | None:
     """Problem with a sink URL (scheme, options, a password in it), or None. Opens nothing."""
-    import importlib
+    from edge.sinks import sink_url_problem
 
-    from edge.sinks import SCHEMES, accepted_forms, redact
-    from edge.sinks.base import parse_sink_url
-
-    scheme, sep, _ = url.partition(":")
-    if not sep or scheme not in SCHEMES:
-        return f"unknown sink {redact(url)!r}. Accepted forms: {accepted_forms()}"
-    try:
-        module = importlib.import_module(SCHEMES[scheme])
-    except ImportError as exc:
-        return f"{scheme}:// sinks are unavailable here: {exc}"
-    try:
-        if hasattr(module, "parse"):
-            module.parse(url)
-        elif scheme == "jsonl" and (url.startswith("jsonl:-") or url.startswith("jsonl://-")):
-            parse_sink_url(url, module.SCHEME, module.FORM, module.STDOUT_OPTIONS)
-        else:
-            location, _ = parse_sink_url(url, module.SCHEME, module.FORM, module.OPTIONS)
-            if not location or location.endswith("/"):
-                return f"{scheme}:// needs a file path. Form: {module.FORM}"
-    except ValueError as exc:
-        return str(exc)
-    return None
+    return sink_url_problem(url)
 
 
 def _sink_urls(v: list[str]) -> str | None:
@@ -349,7 +328,7 @@ def _section(kind: type, raw: dict, name: str, problems: list[str]) -> Any:
         return None
 
 
-def _delegated(kind: type, raw: dict, path: str, problems: list[str]) -> Any:
+def _delegated(kind: Any, raw: dict, path: str, problems: list[str]) -> Any:
     """A section whose typed config lives in its own package: every key checked on its own, so every problem is named."""
     fields = {f.name for f in dataclasses.fields(kind)}
     _unknown(raw, fields, f"{path}.", problems)
@@ -412,9 +391,14 @@ def describe() -> list[Key]:
     """Every key of the configuration, in file order, with its type, default and description."""
     rows: list[Key] = []
 
-    def add(kind: type, prefix: str) -> None:
+    def add(kind: Any, prefix: str) -> None:
         for f in dataclasses.fields(kind):
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            if f.default is not dataclasses.MISSING:
+                default = f.default
+            elif f.default_factory is not dataclasses.MISSING:
+                default = f.default_factory()
+            else:
+                raise TypeError(f"{kind.__name__}.{f.name} has no default")
             if dataclasses.is_dataclass(default):
                 add(type(default), f"{prefix}.{f.name}")
                 continue

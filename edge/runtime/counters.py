@@ -50,7 +50,7 @@ class StageTimes:
     def summary(self) -> dict[str, dict[str, Any]]:
         with self._lock:
             snap = {s: (list(d), self._totals[s]) for s, d in self._ms.items()}
-        out = {}
+        out: dict[str, dict[str, Any]] = {}
         for stage, (values, total) in snap.items():
             if values:
                 a = np.asarray(values)

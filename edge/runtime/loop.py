@@ -31,12 +31,12 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from edge import __version__
 from edge.runtime.board_health import LOST, BoardHealth
-from edge.runtime.sd_notify import Notifier
 from edge.runtime.carpet_calibration import ChosenCalibration, check_board, choose_calibration
 from edge.runtime.config import RuntimeConfig
-from edge.runtime.errors import SetupError
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
+from edge.runtime.errors import SetupError
 from edge.runtime.publisher import Publisher
+from edge.runtime.sd_notify import Notifier
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
 
@@ -220,6 +220,7 @@ class Runtime:
         self._started_wall, self._started_mono = self.clock(), time.monotonic()
         self.board = BoardHealth(self.config.source.board_timeout_s, self._started_mono)
         self.state = "running"
+        assert self.publisher is not None  # made by setup()
         self.publisher.start()
         self.write_status()
         self.publisher.put_info(self.info())
@@ -283,6 +284,8 @@ class Runtime:
         from calibration.runtime import status_temperature_c
 
         src, stages, pub, events = self.source, self.stages, self.publisher, self.events
+        assert stages is not None and pub is not None and self.board is not None  # made by setup() and start()
+        assert self._started_mono is not None
         seconds = self.config.runtime.seconds
         deadline = self._started_mono + seconds if seconds > 0 else None
         last_status = None
@@ -312,11 +315,11 @@ class Runtime:
                             pub.put_record(out.record, frame.host_time_s)
                         if out.kind in ("people", "empty", "unconfirmed"):
                             pub.put_presence(stages.people_now, out.activities)
+                        for callback in self.on_outcome:
+                            callback(out)
                     if events is not None:
                         for payload in events.frame(out, stages.scene_frame, frame.host_time_s):
                             pub.put_event(payload)
-                        for callback in self.on_outcome:
-                            callback(out)
                     if self._limit_reached() or (deadline is not None and time.monotonic() >= deadline):
                         self._stop.set()
                     if self._stop.is_set():
@@ -345,6 +348,7 @@ class Runtime:
 
     def _reserve_seq(self, seq: int) -> bool:
         """True once ``seq`` is reserved on disk (edge.runtime.seq); a record whose seq is not is never published."""
+        assert self.seqs is not None  # set up before the pipeline thread starts
         try:
             self.seqs.reserve(seq)
             return True
@@ -364,6 +368,7 @@ class Runtime:
         Called at least every 0.2 s while the pipeline loop turns, so it also feeds systemd's watchdog."""
         self.notifier.watchdog()
         now = time.monotonic()
+        assert self.board is not None and self.publisher is not None  # made by setup() and start()
         if not self.board.due(now):
             return
         change = self.board.check(now, self._source_stats())
@@ -391,7 +396,7 @@ class Runtime:
                     health = s["board_health"] or {}
                     self.notifier.status(f"board lost: {health.get('reason')}" if health.get("connected") is False else
                                          f"{self._fps:.1f} fps, {s['people']} people, {s['publish']['published']} published")
-                if time.monotonic() >= next_info:
+                if time.monotonic() >= next_info and self.publisher is not None:
                     next_info += rt.info_s
                     self.publisher.put_info(self.info())
             except Exception as exc:  # a full disk must not stop the pipeline
@@ -437,12 +442,12 @@ class Runtime:
         src_queue = dict(st.get("source", {}))
         src_queue.setdefault("dropped_slow_consumer", 0)
         frames = {k: c.get(k, 0) for k in FRAME_COUNTERS}
-        work = {k: c.get(k, 0) for k in WORK_COUNTERS}
+        work: dict[str, Any] = {k: c.get(k, 0) for k in WORK_COUNTERS}
         work["tracks_open"] = self.stages.tracks_open if self.stages else 0
         work["saved"] = {"frames_without_inference": c.get("frames_empty", 0) + c.get("frames_unconfirmed", 0),
                          "encoder_runs": c.get("person_frames", 0) - c.get("encoder_runs", 0),
                          "head_runs": c.get("person_frames", 0) - c.get("head_runs", 0)}
-        publish = {k: c.get(k, 0) for k in PUBLISH_COUNTERS}
+        publish: dict[str, Any] = {k: c.get(k, 0) for k in PUBLISH_COUNTERS}
         publish["queued"] = self.publisher.queued() if self.publisher else 0
         publish["last_seq"] = self.publisher.last_seq if self.publisher else None
         uptime = time.monotonic() - self._started_mono if self._started_mono else 0.0

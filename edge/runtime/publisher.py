@@ -219,10 +219,10 @@ class Publisher:
             return
         self._closed = True
         with self._lock:
-            waiting, self._presence_wait = self._presence_wait, None
-        if waiting is not None:
+            presence, self._presence_wait = self._presence_wait, None
+        if presence is not None:
             for worker in self._workers:
-                worker.set_slot("presence", waiting)
+                worker.set_slot("presence", presence)
         for worker in self._workers:
             worker.set_slot("closing", True)
         if not self._started:

@@ -85,6 +85,7 @@ class FrameStages:
         self._advice(cal.advice)
         if cal.rejected is not None:
             return self._refused(frame, f"calibration_{cal.rejected}")
+        assert cal.pressure_kpa is not None and cal.masked is not None  # only a rejected frame lacks them
         sf = self.scene.update(cal.pressure_kpa, frame.t_s, masks=cal.masked if cal.masked.any() else None)
         self.scene_frame = sf
         times.add("scene", (time.perf_counter() - t1) * 1e3)
@@ -104,6 +105,7 @@ class FrameStages:
     def _record(self, frame: RawFrame, sf: SceneFrame, step: InferenceStep) -> FrameOutcome:
         """One record with everyone's result ("record" stage: make_person/make_record, checks and rounding)."""
         t0 = time.perf_counter()
+        assert sf.handover is not None  # process() records only a valid frame's handover
         people = [make_person(person.track_id, r.transl_m, r.pose_aa, r.betas, r.confidence, r.activity)
                   for person, r in zip(sf.handover.people, step.results)]
         record = make_record(self.device, self._next_seq(), frame.host_time_s, self.model, people)

@@ -1,7 +1,8 @@
 """The status file: the runtime's health, rewritten atomically every second; and how to print it.
 
 Schema ``cavatar.status/1`` (JSON). Top level: schema, device, state (running, stopping,
-stopped, failed; board_mismatch while another board answers and its frames are held back), error, end_reason, pid, version, started, updated (Unix seconds),
+stopped, failed; board_mismatch while another board answers and its frames are held back), error,
+end_reason, pid, version, started, updated (Unix seconds),
 uptime_s, fps (over the last status period), fps_mean (over the run), people (confirmed
 people in the last frame), and the groups:
 

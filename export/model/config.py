@@ -92,8 +92,8 @@ class ModelConfig:
 
 PRESETS: dict[str, ModelConfig] = {
     "lean": ModelConfig(),
-    "paper": ModelConfig(name="paper", encoder="resnet18", coord_channels=False, norm="batch", pool="mean", feature_norm=False, features=256, head="transformer",
-                         d_model=256, layers=6, heads=4, ff=2048, dropout=0.1),
+    "paper": ModelConfig(name="paper", encoder="resnet18", coord_channels=False, norm="batch", pool="mean", feature_norm=False,
+                         features=256, head="transformer", d_model=256, layers=6, heads=4, ff=2048, dropout=0.1),
     # for tests and smoke runs: the lean layout, a few thousand parameters
     "tiny": ModelConfig(name="tiny", encoder_widths=(8, 16), features=16, d_model=16, heads=2, ff=32, layers=1),
 }

@@ -9,8 +9,8 @@ person) or ordinary activity. Pressure is the contact model's (sim.contact) plus
 (sim.objects), clean (no sensor model, no calibration: the path a perfect calibration gives); it goes
 through the runtime's own SceneTracker and :func:`edge.scene.falls.body_features`, so the detector
 sees what it sees on the board: the scene's observations per frame (track, load, area, centre and
-pressure moments; edge.scene.falls.observe), merged into bodies when the detector replays them. The model's activity is not used (the detector then works from
-pressure alone).
+pressure moments; edge.scene.falls.observe), merged into bodies when the detector replays them. The model's
+activity is not used (the detector then works from pressure alone).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def clip_list(seeds, ordinary_s: float = 30.0, falls: bool = True, negatives: bo
 
 def _people(clip: Clip, body, rng):
     """[(Track, load fraction (T,))], truth, seconds."""
-    from sim.motion import Subject, person_track, scene
+    from sim.motion import Subject, scene
     from sim.motion.falls import fall_track, on_carpet
 
     subject = Subject.random(100 + clip.seed, rng)

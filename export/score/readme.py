@@ -1,4 +1,5 @@
-"""README.md's accuracy block, generated from bench/results/score.json (and cavatar eval's docs/model/eval-unseen-888.json, the README's headline unseen table).
+"""README.md's accuracy block, generated from bench/results/score.json (and cavatar eval's
+docs/model/eval-unseen-888.json, the README's headline unseen table).
 
     python -m export.score.readme            # rewrite the block between <!-- score:begin --> and <!-- score:end -->
     python -m export.score.readme --check    # exit 1 when README.md's block differs from the results

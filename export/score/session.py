@@ -53,8 +53,8 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
                  config: Any = None, set_name: str = "custom", command: str = "",
                  say: Callable[[str], None] = print) -> dict[str, Any]:
     """Capture, judge and summarise ``scenes`` (see the module doc); a scene that fails is reported, not fatal."""
-    from edge.body import BodyModel
     from cavatar_common.provenance import git_revision
+    from edge.body import BodyModel
 
     revision = git_revision()  # of the code that runs, before anything is committed meanwhile
     body = BodyModel.load("lite")  # the body the simulator poses and the shipped bundle is trained on

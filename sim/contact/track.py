@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from scipy.signal import savgol_filter
 
 from sim.contact.mesh import subject_mass_kg

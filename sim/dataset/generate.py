@@ -214,7 +214,8 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
     by each shard's ``carpet``, so that the board's path (counts → calibration → kPa) can be read
     (export.data.load_tracks(board=True))."""
     from sim.dataset.calibrate import METHODS
-    from sim.motion import ACTIVITIES, Subject as MotionSubject
+    from sim.motion import ACTIVITIES
+    from sim.motion import Subject as MotionSubject
 
     if not 1 <= people[0] <= people[1] <= 3:
         raise ValueError(f"people must be a range within 1..3, got {people}")

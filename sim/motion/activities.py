@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from sim.motion.keys import BASE, Timeline, both_feet, contacts, pose
-from sim.motion.rig import BACK, BUTT, J, LF, LH, RF, RH, SETTLE
+from sim.motion.rig import BACK, BUTT, LF, LH, RF, RH, SETTLE, J
 
 ACTIVITIES = (
     "stepping", "bending", "turning", "squat", "twisting", "raising_arms", "lunge",

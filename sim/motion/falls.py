@@ -35,7 +35,7 @@ import numpy as np
 from sim.motion.activities import ACTIVITIES, SIT_BENT, SIT_LONG, mirror
 from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, _model, person_track
 from sim.motion.keys import BASE, Timeline, pose
-from sim.motion.rig import J, UPRIGHT, euler_deg_to_matrix, matrix_to_rotvec, rot_z
+from sim.motion.rig import UPRIGHT, J, euler_deg_to_matrix, matrix_to_rotvec, rot_z
 
 FALLS = ("fall_forward", "fall_backward", "fall_sideways", "walk_fall_forward", "walk_fall_sideways",
          "chair_slump", "chair_slide", "slow_collapse")

@@ -12,7 +12,15 @@ from sim.motion.activities import ACTIVITIES, FEET, STANDING, mirror
 from sim.motion.keys import BASE, Timeline, contacts, pose
 from sim.motion.pace import Pacer
 from sim.motion.rig import (
-    CONTACT_PARTS, J, LF, RF, UPRIGHT, Rig, euler_deg_to_matrix, matrix_to_rotvec, rot_z,
+    CONTACT_PARTS,
+    LF,
+    RF,
+    UPRIGHT,
+    J,
+    Rig,
+    euler_deg_to_matrix,
+    matrix_to_rotvec,
+    rot_z,
 )
 
 DEFAULT_RATE_HZ = 14.0
@@ -144,16 +152,10 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
         if target is None or np.linalg.norm(target - pos) < 0.35:
             if target is not None and rng.random() < 0.5:  # pause at the spot
                 pause = min(_u(rng, 0.3, 1.0), t_left - 2 * step_dur)
-                closing = BASE
                 if front is not None:  # bring the feet together first
-                    swing = LF if front == RF else RF
-                    keep = RF if swing == LF else LF
-                    tl.add(0.5 * step_dur, mid if swing == RF else mirror(mid), contacts(keep), keep, label=label)
-                    tl.add(0.5 * step_dur, closing, contacts(keep), keep, label=label)
-                    tl.add(0.1, closing, FEET, keep, label=label)
+                    t_left -= _close_feet(tl, front, mid, step_dur, label)
                     pos = pos + 0.5 * step * np.array([np.sin(head), -np.cos(head)])
-                    t_left -= step_dur + 0.1
-                    front, stance = None, keep
+                    front, stance = None, front
                 tl.add(pause, BASE, FEET, stance, label=STANDING)
                 t_left -= pause
             for _ in range(20):
@@ -170,6 +172,11 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
         # Short steps while turning toward a spot off to the side, and when close to it.
         short = float(np.clip(np.cos(err - turn) * min(1.0, np.linalg.norm(d) / step), 0.35, 1.0))
         swing = LF if stance == RF else RF
+        if front is None:  # from the feet together: the weight goes onto the stance foot as the swing heel rises
+            heel_start = [0.0, 0.0]
+            heel_start[swing] = START_HEEL_OFF_DEG * a
+            tl.add(START_DS_S * style.tempo, BASE, FEET, stance, heel=heel_start, label=label)
+            t_left -= START_DS_S * style.tempo
         # Swing through the mid pose into double support with the swing foot in front.
         ds_k = BASE + (ds - BASE) * short
         end = mirror(ds_k) if swing == RF else ds_k
@@ -181,17 +188,18 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
         heel_mid[swing] = heel_off[swing] = -HEEL_STRIKE_DEG * max(short, 0.7)  # the swing foot lands on its heel, toes up
         tl.add(0.5 * step_dur, m, contacts(stance), stance, turn_rad=0.5 * turn, label=label)
         tl.add(0.5 * step_dur, end, contacts(stance), stance, turn_rad=0.5 * turn, heel=heel_mid, label=label)
-        tl.add(0.12 * style.tempo, end, FEET, stance, heel=heel_off, label=label)
+        # Double support: the body passes onto the landing foot (it carries the pelvis from here), the
+        # trailing knee flexes as its heel rises (pre-swing), so the pelvis stays low between the feet.
+        push = end.copy()
+        push[J["left_knee" if stance == LF else "right_knee"], 0] = PRE_SWING_KNEE_DEG * a
+        tl.add(0.12 * style.tempo, push, FEET, swing, heel=heel_off, label=label)
         head += turn
         pos = pos + frac * short * step * np.array([np.sin(head), -np.cos(head)])
         t_left -= step_dur + 0.12 * style.tempo
         front, stance = swing, swing
     if front is not None:  # close the feet
-        swing = LF if front == RF else RF
-        keep = front
-        tl.add(0.5 * step_dur, mid if swing == RF else mirror(mid), contacts(keep), keep, label=label)
-        tl.add(0.5 * step_dur, BASE, contacts(keep), keep, label=label)
-        stance = keep
+        _close_feet(tl, front, mid, step_dur, label)
+        stance = front
     tl.add(0.1, BASE, FEET, stance, label=STANDING)
     tl.scale_to(seconds - 0.2)
     tl.add(0.2, BASE, FEET, LF, label=STANDING)
@@ -199,6 +207,22 @@ def _walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading
 
 
 HEEL_STRIKE_DEG = 15.0  # toes up at heel strike (the foot is flat by mid-stance)
+CLOSE_STRIKE_DEG = 8.0  # a short closing step lands on its heel too, toes a little up
+PRE_SWING_KNEE_DEG = 35.0  # the trailing knee at toe-off (gait studies: ~35–40°)
+START_HEEL_OFF_DEG = 20.0  # the first step from standing: the swing heel rises while the weight shifts
+START_DS_S = 0.25
+
+
+def _close_feet(tl, front, mid, step_dur, label) -> float:
+    """The back foot steps up beside the front one (``front`` stays on the floor): it swings
+    through the mid pose and lands on its heel, then both feet roll flat. Returns the seconds."""
+    swing = LF if front == RF else RF
+    heel_land = [0.0, 0.0]
+    heel_land[swing] = -CLOSE_STRIKE_DEG
+    tl.add(0.5 * step_dur, mid if swing == RF else mirror(mid), contacts(front), front, label=label)
+    tl.add(0.5 * step_dur, BASE, contacts(front), front, heel=heel_land, label=label)
+    tl.add(0.2, BASE, FEET, front, label=label)
+    return step_dur + 0.2
 
 
 def _u(rng, lo, hi):
@@ -276,8 +300,9 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     hand_rot = _flat_hands(heading)
     balance = np.ones(n, bool)  # walking too: its COM follows the path whose ZMP is on the stance foot
     seated = lab == ACTIVITIES.index("sitting")
+    walking = lab == ACTIVITIES.index("walking")  # its swinging feet follow planned paths (sim.motion.swing)
     transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
-                        seated=seated)
+                        seated=seated, swing=walking)
     pose_aa = matrix_to_rotvec(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
 

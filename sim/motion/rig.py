@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from edge.body import SMPL_PARENTS, BodyModel
-from edge.body import lbs
+from edge.body import SMPL_PARENTS, BodyModel, lbs
 from edge.body.rotations import euler_xyz_deg_to_matrix as euler_deg_to_matrix  # noqa: F401  (sim.motion uses these names)
 from edge.body.rotations import matrix_to_axis_angle as matrix_to_rotvec  # noqa: F401
 from edge.body.rotations import skew
-from sim.motion.balance import foot_geometry, support_point, zmp_com
+from sim.motion.balance import foot_geometry, left_weight, support_point, zmp_com
+from sim.motion.swing import swing_ankle_path, swing_spans
 
 J = {name: i for i, name in enumerate((
     "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
@@ -206,7 +206,7 @@ class Rig:
     def ground(self, local: np.ndarray, contact: np.ndarray, anchor: np.ndarray, heel_deg: np.ndarray,
                foot_yaw: np.ndarray, hand_rot: np.ndarray | None = None, start_xy=(0.0, 0.0),
                iterations: int = 3, balance: np.ndarray | None = None, rate_hz: float = 14.0,
-               seated: np.ndarray | None = None) -> np.ndarray:
+               seated: np.ndarray | None = None, swing: np.ndarray | None = None) -> np.ndarray:
         """Place a posed sequence on the floor; returns transl (T,3) (the pelvis).
 
         local: (T,24,3,3) local rotations, joint 0 the world orientation (modified in place:
@@ -215,7 +215,10 @@ class Rig:
         carries the root (a contact part in that frame, or SETTLE); heel_deg: (T,2) heel
         raise of each foot while in contact (0 flat, ~70 on the toes); foot_yaw: (T,2) world
         yaw of each foot (rad) used when it touches down; hand_rot: optional (T,2,3,3) world
-        orientation of the wrists while the hands touch.
+        orientation of the wrists while the hands touch; balance, seated, swing: optional (T,)
+        bool masks of the frames where the COM is balanced over the feet (``_balance``), a
+        floor sitter's trunk is put over the buttocks, and a foot between two contacts
+        follows a planned swing path (``sim.motion.swing``: walking).
 
         1. Lock points: a foot's ball (flat at its touch-down yaw, heel raised by heel_deg),
            a hand's wrist (and its orientation), the buttocks'/back's pelvis/spine joint.
@@ -269,6 +272,8 @@ class Rig:
         g = self.fk(local)
         z = self.vertex_z(local, g)
         part_low = np.stack([z[:, idx].min(1) for idx in self.part_vertices], 1)  # (T,6)
+        # height of each ankle above its foot's lowest point (set by the foot's orientation alone)
+        ankle_drop = {q: g[1][:, _CHAINS[q][2], 2] - part_low[:, q] for q in (LF, RF)}
         lock_local = g[1][:, list(LOCK_JOINT)]  # (T,6,3)
 
         # ---- 1. the anchor chain
@@ -307,6 +312,9 @@ class Rig:
             transl[seg] = w - lock_local[seg, p]
             if p in (BUTT, BACK):
                 transl[seg, 2] = -part_low[seg, p]
+            elif p in (LF, RF):  # rolling on the heel (toes up): the heel, not the locked ball, is on the floor
+                rock = np.flatnonzero(contact[seg, p] & (heel[seg, p] < 0)) + s
+                transl[rock, 2] = -part_low[rock, p]
             if settle:
                 down = w_prev is None or w_prev[0] in limbs
                 ramp = min_jerk((np.arange(e - s) + 1.0) / (e - s))
@@ -365,6 +373,16 @@ class Rig:
                 target[rock, 2] = zf[rock]
                 target = target - np.einsum("nij,j->ni", foot_rot[q][frames], self.foot_vec[q])
             solve[q] = (frames, weight[frames], target, c[frames])
+        swing_ik = {}  # foot → (frames, ankle targets) of its planned swings
+        for q in (LF, RF) if swing is not None else ():
+            if q not in solve:
+                continue
+            spans = swing_spans(contact[:, q], swing, int(round(_MAX_SWING_S * rate_hz)))
+            if spans:
+                ankle = np.zeros((n, 3))
+                ankle[solve[q][0]] = solve[q][2]
+                ends = np.array(spans)
+                swing_ik[q] = swing_ankle_path(spans, ankle[ends[:, 0]], ankle[ends[:, 1]], ankle_drop[q])
 
         def put_limbs(g_rot, g_t):
             """Every locked limb onto its lock (hands ramp toward it before and after contact)."""
@@ -374,6 +392,8 @@ class Rig:
                     native = transl[frames] + g_t[frames, _CHAINS[q][2]]
                     end = native + wgt[:, None] * (target - native)
                 self.two_bone_ik(local, q, frames, end - transl[frames], (g_rot[frames], g_t[frames]))
+            for q, (frames, path) in swing_ik.items():
+                self.two_bone_ik(local, q, frames, path - transl[frames], (g_rot[frames], g_t[frames]))
             g_rot, g_t = self.fk(local)
             orient_ends(all_frames, g_rot)
 
@@ -381,14 +401,20 @@ class Rig:
         if seated is not None:  # after the feet are on their locks: the lever to them is known
             put_limbs(*self.fk(local))
             self._sit_over_buttocks(local, contact, anchor, np.asarray(seated, bool))
+        com_path = None
         if balance is not None:
             put_limbs(*self.fk(local))
-            self._balance(local, transl, contact, anchor, heel, foot_rot, np.asarray(balance, bool), rate_hz, put_limbs)
+            com_path = self._balance(local, transl, contact, anchor, heel, foot_rot, np.asarray(balance, bool), rate_hz,
+                                     put_limbs)
 
         # ---- 2. reach, IK, rest, lift
         moved_body = 0.0
         for it in range(iterations):
             g_rot, g_t = self.fk(local)
+            if com_path is not None:  # lowering the pelvis bent the knees forward: keep the COM on its path
+                desired, wgt = com_path
+                com = transl[:, :2] + self.mass_model.com_from_fk(g_rot, g_t)[:, :2]
+                transl[:, :2] += wgt[:, None] * (desired - com)
             need = np.zeros(n)
             for q, (frames, wgt, target, on) in solve.items():
                 f = frames[on]
@@ -450,14 +476,15 @@ class Rig:
             put_limbs(*self.fk(local))
         return transl
 
-    def _balance(self, local, transl, contact, anchor, heel, foot_rot, balance, rate_hz, put_limbs, rounds: int = 3) -> None:
+    def _balance(self, local, transl, contact, anchor, heel, foot_rot, balance, rate_hz, put_limbs, rounds: int = 3):
         """Shift the pelvis (in place) where the body stands on its feet alone so that the COM
         follows the path whose zero-moment point is the feet's support point; faded in and
-        out over a few frames around those spans. The locked feet are put back by IK."""
+        out over a few frames around those spans. The locked feet are put back by IK.
+        Returns (desired COM (T,2), weight (T,)) for the later passes, or None."""
         feet = contact[:, [LF, RF]]
         feet_only = feet.any(1) & ~contact[:, [LH, RH, BUTT, BACK]].any(1) & np.isin(anchor, (LF, RF)) & balance
         if not feet_only.any():
-            return
+            return None
         wgt = _near_contact_weight(feet_only, _SMOOTH + 1)
         desired = None
         for _ in range(rounds):
@@ -467,14 +494,12 @@ class Rig:
                 p = com.copy()
                 pts = {q: support_point(transl + g_t[:, LOCK_JOINT[q]], foot_rot[q], self.foot_geometry[q],
                                         heel[:, q]) for q in (LF, RF)}
-                both = feet_only & feet.all(1)
-                p[both] = 0.5 * (pts[LF][both] + pts[RF][both])
-                for q, other in ((LF, RF), (RF, LF)):
-                    one = feet_only & contact[:, q] & ~contact[:, other]
-                    p[one] = pts[q][one]
+                w = left_weight(feet[:, 0], feet[:, 1], rate_hz)[:, None]
+                p[feet_only] = (w * pts[LF] + (1.0 - w) * pts[RF])[feet_only]
                 desired = zmp_com(p, rate_hz, self.com_height)
             transl[:, :2] += wgt[:, None] * (desired - com)
             put_limbs(g_rot, g_t)
+        return desired, wgt
 
     def _sit_over_buttocks(self, local, contact, anchor, seated, rounds: int = 3) -> None:
         """Sitting on the floor without the hands: flex (or extend) the lower spine so that the
@@ -520,6 +545,7 @@ class Rig:
 
 
 _SMOOTH = 4  # frames over which transl corrections are spread
+_MAX_SWING_S = 1.2  # a foot off the floor longer than this is not a walking step's swing
 SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
 _UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
 _SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis

@@ -56,7 +56,9 @@ class TileLayout:
                 raise RecordingError(f"tile {k} is {tile.shape[1:]}, the layout expects {(self.tile_rows, self.tile_cols)}")
         out = np.zeros((n, *self.shape), dtype=tiles[0].dtype)
         for (r, c, rot), tile in zip(self.cells, tiles):
-            out[:, r * self.tile_rows : (r + 1) * self.tile_rows, c * self.tile_cols : (c + 1) * self.tile_cols] = np.rot90(tile, rot, axes=(1, 2))
+            rows = slice(r * self.tile_rows, (r + 1) * self.tile_rows)
+            cols = slice(c * self.tile_cols, (c + 1) * self.tile_cols)
+            out[:, rows, cols] = np.rot90(tile, rot, axes=(1, 2))
         return out
 
 

@@ -95,7 +95,8 @@ def match_to_carpet(tracks: list[VibeTrack], video_t_s: np.ndarray, carpet_t_s: 
     }
     for slot, track in enumerate(sorted(tracks, key=lambda t: t.frame_ids.min())):
         if track.frame_ids.max() >= len(video_t_s):
-            raise RecordingError(f"track {track.track_id} refers to video frame {track.frame_ids.max()}, the timestamps have {len(video_t_s)}")
+            raise RecordingError(f"track {track.track_id} refers to video frame {track.frame_ids.max()}, "
+                                 f"the timestamps have {len(video_t_s)}")
         t_track = video_t_s[track.frame_ids]
         order = np.argsort(t_track)
         t_track = t_track[order]

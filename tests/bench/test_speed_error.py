@@ -11,8 +11,15 @@ import pytest
 torch = pytest.importorskip("torch")
 pytest.importorskip("onnxscript")
 
-from export.benchmark import (BenchmarkError, SpeedErrorConfig, bundle_variants, markdown, pareto_front,  # noqa: E402
-                              run_speed_error, write_outputs)
+from export.benchmark import (  # noqa: E402
+    BenchmarkError,
+    SpeedErrorConfig,
+    bundle_variants,
+    markdown,
+    pareto_front,
+    run_speed_error,
+    write_outputs,
+)
 
 TOP = {"schema", "benchmark", "command", "date", "git_revision", "machine", "method", "evaluation", "variants", "pareto_front",
        "ratios", "elapsed_s"}

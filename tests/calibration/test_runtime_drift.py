@@ -13,8 +13,15 @@ from calibration.drift import DriftConfig, DriftMonitor
 from calibration.from_truth import calibration_from_truth
 from calibration.runtime import CalibratedFrames
 from sim.footsteps import FootstepCarpet
-from sim.sensor import (CarpetSensor, CrosstalkConfig, DynamicsConfig, FrontEndConfig, GridConfig, SensorConfig,
-                        SessionConfig)
+from sim.sensor import (
+    CarpetSensor,
+    CrosstalkConfig,
+    DynamicsConfig,
+    FrontEndConfig,
+    GridConfig,
+    SensorConfig,
+    SessionConfig,
+)
 
 
 @pytest.fixture(scope="module")

@@ -123,7 +123,6 @@ def build() -> dict[str, bytes]:
 
 def valid_calibration() -> bytes:
     """A valid calibration of board A (8×6), byte for byte the same every time."""
-    import io
     import tempfile
 
     from calibration.file import Calibration

@@ -6,8 +6,17 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from export.metrics import (heading_error_rad, heading_rad, joint_errors, local_mpjpe, mpjpe, pa_mpjpe, procrustes_align, pve,
-                            with_true_orientation)
+from export.metrics import (
+    heading_error_rad,
+    heading_rad,
+    joint_errors,
+    local_mpjpe,
+    mpjpe,
+    pa_mpjpe,
+    procrustes_align,
+    pve,
+    with_true_orientation,
+)
 
 UPRIGHT = np.array([np.pi / 2, 0.0, 0.0])  # canonical Y up → carpet z up
 

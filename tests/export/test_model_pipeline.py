@@ -14,7 +14,6 @@ from export.model import ModelConfig  # noqa: E402
 from export.train import TrainConfig, Trainer, load_model  # noqa: E402
 
 
-
 def _trainer(data, out, steps, lr=3e-3, **kw):
     cfg = TrainConfig(data=str(data), out=str(out), steps=steps, batch=6, lr=lr, val_every=0, checkpoint_every=1000,
                       log_every=1, progress=False, seed=5, threads=1, **kw)

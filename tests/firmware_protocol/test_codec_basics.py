@@ -45,7 +45,8 @@ def test_definition_hash_changes_with_the_wire_layout(raw):
         "field name": lambda r: _field(r, "STATUS", "uptime_s").update(name="uptime_ms"),
         "packet id": lambda r: next(p for p in r["packet"] if p["name"] == "PING").update(id=0x87),
         "seed kind": lambda r: next(p for p in r["packet"] if p["name"] == "START").update(seed="fixed"),
-        "field order": lambda r: (lambda f: f.__setitem__(slice(0, 2), f[1::-1]))(next(p for p in r["packet"] if p["name"] == "ACK")["fields"]),
+        "field order": lambda r: (lambda f: f.__setitem__(slice(0, 2), f[1::-1]))(
+            next(p for p in r["packet"] if p["name"] == "ACK")["fields"]),
         "enum value": lambda r: r["enums"]["packing"].update(u16=3),
         "version": lambda r: r["protocol"].update(version=2),
     }

@@ -69,7 +69,8 @@ def make_packets(rng: np.random.Generator, n: int) -> list:
             out.append(codec.Status(seq & 0xFFFF, t_us, frame // 14, frame, 0, 0, 0, 0, 0, int(rng.integers(-32768, 32768)), 65535))
             seq += 1
         if frame % 50 == 0:
-            out.append(codec.Info(seq & 0xFFFF, codec.PROTOCOL_VERSION, codec.DEFINITION_HASH, 1, 2, 3, f"carpet-{frame}", 96, 96, 1, 1, 12, 1, -1, 14000, 3))
+            out.append(codec.Info(seq & 0xFFFF, codec.PROTOCOL_VERSION, codec.DEFINITION_HASH, 1, 2, 3, f"carpet-{frame}",
+                                  96, 96, 1, 1, 12, 1, -1, 14000, 3))
             seq += 1
         if frame % 20 == 7:
             ack = codec.Ack(seq & 0xFFFF, 0x86, frame & 0xFFFF, int(rng.integers(2**32)))

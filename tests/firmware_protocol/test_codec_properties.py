@@ -24,7 +24,8 @@ def opts(max_examples: int = 100) -> settings:
     CI is a busy 2-core box, and a slow example is not a failure here."""
     return settings(max_examples=max_examples, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
-INT_RANGES = {"u8": (0, 0xFF), "i8": (-0x80, 0x7F), "u16": (0, 0xFFFF), "i16": (-0x8000, 0x7FFF), "u32": (0, 0xFFFFFFFF), "i32": (-(2**31), 2**31 - 1)}
+INT_RANGES = {"u8": (0, 0xFF), "i8": (-0x80, 0x7F), "u16": (0, 0xFFFF), "i16": (-0x8000, 0x7FFF), "u32": (0, 0xFFFFFFFF),
+              "i32": (-(2**31), 2**31 - 1)}
 # device_id: ASCII without NUL (NUL pads it on the wire), up to 16 characters
 DEVICE_IDS = st.text(alphabet=st.characters(min_codepoint=1, max_codepoint=127), max_size=16)
 
@@ -209,7 +210,8 @@ def test_samples_round_trip(packing, data):
     assert row.count == len(values) and row.samples == packed
 
 
-@given(st.sampled_from(sorted(P.values())), st.lists(st.integers(0, 0xFFFF), max_size=20), st.one_of(st.integers(-(2**20), -1), st.integers(1, 2**20)))
+@given(st.sampled_from(sorted(P.values())), st.lists(st.integers(0, 0xFFFF), max_size=20),
+       st.one_of(st.integers(-(2**20), -1), st.integers(1, 2**20)))
 @opts()
 def test_out_of_range_samples_raise_value_error(packing, values, bad):
     bad = bad if bad < 0 else LIMIT[packing] + bad

@@ -1,6 +1,5 @@
 """`cavatar sim audit`: the fidelity report measures the generator's own output and flags what is out of range."""
 
-import json
 
 import numpy as np
 

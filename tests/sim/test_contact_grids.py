@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from edge.body import BodyModel
-from sim.contact import ContactModel, G_M_S2, subject_mass_kg, tissue_stiffness
+from sim.contact import G_M_S2, ContactModel, subject_mass_kg, tissue_stiffness
 from sim.contact.scenes import grounded_vertices, scene_pose
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from edge.body import BodyModel
 from edge.body.poses import POSES
-from sim.contact import ContactModel, G_M_S2, subject_mass_kg, tissue_stiffness
+from sim.contact import G_M_S2, ContactModel, subject_mass_kg, tissue_stiffness
 from sim.contact.scenes import SCENE_POSES, grounded_vertices, scene_pose
 
 BALANCEABLE = [p for p in SCENE_POSES if p != "lunge"]

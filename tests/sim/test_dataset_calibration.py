@@ -97,3 +97,43 @@ def test_board_tracks_reach_the_model_floored_and_clipped_as_the_runtime_feeds_i
     fed = track_pressure(board, seed=0)
     np.testing.assert_array_equal(fed, np.minimum(np.where(raw < FLOOR_KPA, 0.0, raw), SATURATION_KPA))
     np.testing.assert_array_equal(fed, track_pressure(board, seed=1))  # no random corruption on top of the sensor
+
+
+def test_training_input_of_a_board_track_is_floored_and_clipped_as_the_runtime_does():
+    from edge.infer.model_input import FLOOR_KPA, SATURATION_KPA
+    from export.data import corrupt, training_input
+
+    p = np.array([[[0.0, 0.1, 0.5, 5.0, 40.0]]], np.float32)
+    out = training_input(p, np.random.default_rng(0), board=True).numpy()[0, 0]
+    assert out[0] == out[1] == 0.0                       # below the runtime's floor: nothing
+    assert 0.92 * 0.5 <= out[2] <= 1.08 * 0.5 and 0.92 * 5.0 <= out[3] <= 1.08 * 5.0  # one global gain, nothing else
+    assert out[4] == SATURATION_KPA and FLOOR_KPA > 0.1
+    clean = training_input(p, np.random.default_rng(0), board=False).numpy()
+    np.testing.assert_array_equal(clean, corrupt(p, np.random.default_rng(0)).numpy())
+
+
+def test_a_frames_run_trains_on_the_board_path_and_refuses_an_unknown_input(calibrated, tmp_path):
+    from export.model import ModelConfig
+    from export.train import TrainConfig, Trainer
+
+    cfg = TrainConfig(data=str(calibrated), out=str(tmp_path / "run"), stage="frames", input="board", steps=2, batch=4,
+                      checkpoint_every=1, val_every=100, progress=False)
+    tr = Trainer(cfg, ModelConfig.preset("tiny"))
+    assert tr.tracks and all(t.board for t in tr.tracks)
+    tr.run()
+    with pytest.raises(ValueError, match="'clean' or 'board'"):
+        Trainer(TrainConfig(data=str(calibrated), out=str(tmp_path / "x"), stage="frames", input="counts"),
+                ModelConfig.preset("tiny"))
+
+
+def test_board_path_masks_a_person_alone_to_their_footprint_as_the_runtime_does(calibrated):
+    from scipy import ndimage
+
+    board = load_tracks(calibrated, "test", board=True) + load_tracks(calibrated, "train", board=True)
+    truth = load_tracks(calibrated, "test") + load_tracks(calibrated, "train")
+    for b, t in zip(board, truth):
+        pt = t.pressure_kpa.astype(np.float32)
+        footprint = np.stack([ndimage.binary_dilation(f > 0.2, iterations=2) for f in pt])
+        assert not b.pressure_kpa[~footprint].any()  # nothing read away from the person reaches the model
+        # and their own load does (the sensor reads less than the truth: saturation, crosstalk)
+        assert b.pressure_kpa[footprint].astype(np.float32).sum() > 0.3 * pt.sum()

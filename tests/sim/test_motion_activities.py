@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from edge.body import BodyModel
-from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, box_gaps, person_track, scene
+from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, person_track, scene
 from sim.motion.rig import _SACRUM_DROP, LOCK_JOINT, Rig
 
 RATE = 14.0

@@ -1,6 +1,5 @@
 """Rails, sign, bit depth, empty-frame statistics, determinism and grid sizes."""
 
-from dataclasses import replace
 
 import numpy as np
 import pytest

@@ -1,6 +1,5 @@
 """Temperature, drift, creep and hysteresis move readings the documented way."""
 
-from dataclasses import replace
 
 import numpy as np
 import pytest

@@ -1,6 +1,5 @@
 """Each fault appears exactly where it was configured."""
 
-from dataclasses import replace
 
 import numpy as np
 import pytest

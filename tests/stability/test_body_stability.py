@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from edge.body import BodyModel, BodyModelWarning, SMPL_PARENTS
+from edge.body import SMPL_PARENTS, BodyModel, BodyModelWarning
 from edge.body.rotations import axis_angle_to_matrix, matrix_to_axis_angle
 from edge.infer.rotations import rot6d_to_axis_angle
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.sparse
 
-from edge.body import BodyModel, BodyModelFileError, SMPL_PARENTS, read_body_file, write_body_npz
+from edge.body import SMPL_PARENTS, BodyModel, BodyModelFileError, read_body_file, write_body_npz
 
 N_V = 40
 

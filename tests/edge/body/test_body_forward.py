@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from edge.body import BodyModel, BodyModelWarning, SMPL_PARENTS, shipped_model_path, write_body_npz
-from edge.body import lbs
+from edge.body import SMPL_PARENTS, BodyModel, BodyModelWarning, lbs, shipped_model_path, write_body_npz
 
 
 @pytest.fixture(scope="module")

@@ -23,6 +23,28 @@ def test_every_registered_subcommand_is_available_and_has_help(capsys):
         assert out.startswith(f"usage: cavatar {name}") and len(out.splitlines()) > 3
 
 
+def test_command_names_are_written_once_in_subcommands(monkeypatch):
+    """--help lists exactly the names of SUBCOMMANDS; a module that adds another name is refused, and a module that
+    cannot import is reported under its own command names (not its module's last component)."""
+    import argparse
+
+    parser, _ = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    assert list(sub.choices) == [name for names in SUBCOMMANDS.values() for name in names]
+    monkeypatch.setitem(SUBCOMMANDS, "edge.cli.doctor", ("checkup",))  # edge's modules read their name from it
+    parser, _ = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    assert "checkup" in sub.choices and "doctor" not in sub.choices
+    monkeypatch.setitem(SUBCOMMANDS, "export.score.cli", ("grade",))  # a module that names its own command
+    with pytest.raises(ValueError, match=r"export.score.cli added the commands \('score',\); SUBCOMMANDS lists"):
+        build_parser()
+    monkeypatch.setitem(SUBCOMMANDS, "export.score.cli", ("score",))
+    monkeypatch.setitem(SUBCOMMANDS, "no_such_module_for_cavatar.cli", ("ghost", "phantom"))
+    parser, unavailable = build_parser()
+    assert set(unavailable) == {"ghost", "phantom"} and "No module named" in unavailable["ghost"]
+    assert "ghost: unavailable" in parser.epilog and "phantom: unavailable" in parser.epilog
+
+
 def test_no_command_prints_help_and_fails(capsys):
     assert main([]) == 2
     assert "commands:" in capsys.readouterr().out

@@ -5,8 +5,8 @@ each says which. On an installed board `doctor` used to check the virtual carpet
 import json
 
 import pytest
-
 from deploy_helpers import run_cli
+
 from edge.runtime import config_choice
 from edge.runtime.config_choice import choose_config
 

@@ -232,10 +232,10 @@ def test_an_anonymous_broker_passes_and_the_spool_folder_is_checked(capsys, conf
 
 
 def test_the_status_folder_of_the_service_is_fine_before_systemd_made_it(capsys, config, tmp_path, monkeypatch):
-    from edge.runtime import doctor as doctor_module
+    from edge import health
 
     run_dir = tmp_path / "run" / "cavatar"  # stands for /run/cavatar, which systemd creates at start
-    monkeypatch.setattr(doctor_module, "SERVICE_DIRS", {str(run_dir): "RuntimeDirectory=cavatar"})
+    monkeypatch.setattr(health, "SERVICE_DIRS", {str(run_dir): "RuntimeDirectory=cavatar"})
     code, lines = doctor(capsys, config(runtime={"status_file": str(run_dir / "status.json")}))
     assert code == 0 and "RuntimeDirectory=cavatar" in line(lines, "status file")
 
@@ -244,15 +244,13 @@ def test_a_port_or_folder_this_user_may_not_use_fails_saying_what_to_do(capsys, 
     """The tests run as root, for whom everything is accessible: os.access is narrowed to what a user would see."""
     import grp
 
-    from edge.runtime import doctor as doctor_module
-
     master, slave = os.openpty()
     port, out = os.ttyname(slave), tmp_path / "out"
     os.chown(port, -1, grp.getgrnam("dialout").gr_gid)  # as a CDC-ACM port is
     os.chmod(port, 0o660)
     out.mkdir()
     real_access = os.access
-    monkeypatch.setattr(doctor_module.os, "access",
+    monkeypatch.setattr(os, "access",
                         lambda p, mode: False if str(p) in (port, str(out)) else real_access(p, mode))
     try:
         code, lines = doctor(capsys, config(source={"url": f"serial://{port}"}))
@@ -269,7 +267,6 @@ def test_a_port_or_folder_this_user_may_not_use_fails_saying_what_to_do(capsys, 
 
 def test_a_board_is_not_probed_when_the_status_file_cannot_be_read(capsys, config, tmp_path, monkeypatch):
     """As a user outside the service's group: the runtime may hold the board, so doctor does not open it."""
-    from edge.runtime import doctor as doctor_module
     from edge.runtime.status import SCHEMA, write_status
     from firmware_protocol.pty_board import PtyBoard
     from firmware_protocol.virtual_board import VirtualBoard
@@ -277,7 +274,7 @@ def test_a_board_is_not_probed_when_the_status_file_cannot_be_read(capsys, confi
     status = tmp_path / "out" / "status.json"
     write_status(status, {"schema": SCHEMA, "state": "stopped", "pid": 1})
     real_access = os.access
-    monkeypatch.setattr(doctor_module.os, "access",
+    monkeypatch.setattr(os, "access",
                         lambda p, mode: False if str(p) == str(status) and mode & os.R_OK else real_access(p, mode))
     with PtyBoard(VirtualBoard(96, 96, device_id="sim-7")) as pty:
         code, lines = doctor(capsys, config(source={"url": f"serial://{pty.port}"}))
@@ -303,8 +300,8 @@ def test_doctor_passes_on_a_board_without_torch(config):
 
 
 def test_a_package_that_requires_torch_fails(capsys, config, monkeypatch):
-    from edge.runtime import doctor as doctor_module
+    from edge.runtime import install_check
 
-    monkeypatch.setattr(doctor_module, "_requires", lambda dist: ["numpy>=1.26", "torch==2.13.0"])
+    monkeypatch.setattr(install_check, "_requires", lambda dist: ["numpy>=1.26", "torch==2.13.0"])
     code, lines = doctor(capsys, config())
     assert code == 1 and line(lines, "torch").startswith("FAIL") and "export extra" in line(lines, "torch")

@@ -3,7 +3,6 @@
 import re
 
 import pytest
-
 from deploy_helpers import GUIDE, run_cli
 
 # `cavatar` as a command (also /opt/cavatar/venv/bin/cavatar), followed by its subcommand word

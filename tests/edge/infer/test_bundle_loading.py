@@ -91,6 +91,24 @@ def test_loads_and_runs(tmp_path):
         b.encode(np.zeros((1, 1, H + 1, W), np.float32))
 
 
+def test_head_outputs_are_the_graphs_own_outputs_that_head_publishes(tmp_path):
+    """Evaluation (export.evaluate.bundle_callables) reads the raw head outputs through this public method."""
+    from edge.infer.bundle import HEAD_OUTPUTS
+    from edge.infer.rotations import rot6d_to_axis_angle
+
+    b = ModelBundle.load(make_bundle(tmp_path / "b"), grid=(H, W))
+    window = np.random.default_rng(0).normal(size=(2, T, F)).astype(np.float64)  # any float dtype is taken
+    raw = b.head_outputs(window)
+    assert set(HEAD_OUTPUTS) <= set(raw) and raw["rot6d"].shape == (2, 144) and raw["rot6d"].dtype == np.float32
+    out = b.head(window)
+    np.testing.assert_allclose(out["pose_aa"], rot6d_to_axis_angle(raw["rot6d"]), atol=1e-6)
+    np.testing.assert_array_equal(out["transl_rel_m"], raw["transl_rel_m"])
+    with pytest.raises(ValueError, match=rf"head expects \(B,{T},{F}\), got \(2, {T + 1}, {F}\)"):
+        b.head_outputs(np.zeros((2, T + 1, F), np.float32))
+    with pytest.raises(ValueError, match="head input"):
+        b.head_outputs(np.full((1, T, F), np.nan, np.float32))
+
+
 def test_tampered_file_is_refused_naming_file_and_hashes(tmp_path):
     folder = make_bundle(tmp_path / "b")
     expected = json.loads((folder / "manifest.json").read_text())["files"]["head.onnx"]

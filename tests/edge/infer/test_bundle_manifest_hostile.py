@@ -11,10 +11,11 @@ import pytest
 
 pytest.importorskip("onnx")
 
+from test_bundle_loading import make_bundle  # noqa: E402
+
 from edge.infer import BundleError, ModelBundle  # noqa: E402
 from edge.infer.bundle import SIDECAR, seal_manifest, sha256_file, write_manifest  # noqa: E402
 from edge.runtime.config import default_bundle_path  # noqa: E402
-from test_bundle_loading import make_bundle  # noqa: E402
 
 
 def edit(folder: Path, change) -> dict:

@@ -23,7 +23,8 @@ def upright(yaw: float) -> np.ndarray:
 
 
 def feet(toes: str, heel_kpa: float = 10.0, toe_kpa: float = 6.0) -> np.ndarray:
-    """(96,96) two parallel feet 13 sensels long (25 cm), 5 wide, heel-heavy (CoP 11 mm behind the centroid), toes toward −y ("up") or +y ("down")."""
+    """(96,96) two parallel feet 13 sensels long (25 cm), 5 wide, heel-heavy (CoP 11 mm behind the centroid),
+    toes toward −y ("up") or +y ("down")."""
     p = np.zeros((96, 96), np.float32)
     ramp = np.linspace(toe_kpa, heel_kpa, 13)[:, None]  # row 0 of the foot is its toe
     if toes == "down":

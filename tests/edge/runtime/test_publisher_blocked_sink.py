@@ -7,6 +7,8 @@ import sys
 import threading
 import time
 
+import pytest
+
 from edge.record import make_record
 from edge.runtime.counters import PUBLISH_COUNTERS, Counters, StageTimes
 from edge.runtime.publisher import Publisher

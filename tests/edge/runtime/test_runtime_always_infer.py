@@ -5,12 +5,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scripted_stages import Calibrated, H, ScriptedScene, W, foot, frame, person
 
 from edge.infer import ModelBundle
 from edge.runtime.config import default_bundle_path
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.stages import FrameStages
-from scripted_stages import H, W, Calibrated, ScriptedScene, foot, frame, person
 
 
 @pytest.fixture(scope="module")

@@ -9,10 +9,10 @@ import sys
 import time
 
 import pytest
+from runtime_helpers import read_jsonl, sim_url
 
 from edge.cli import main
 from edge.runtime.config import default_bundle_path
-from runtime_helpers import read_jsonl, sim_url
 
 
 def run_args(out, *extra):

@@ -87,7 +87,8 @@ def test_overrides_replace_file_values_and_are_checked(tmp_path):
     assert cfg.runtime.seconds == 5.0 and isinstance(cfg.runtime.seconds, float)
     o = cfg.with_overrides(source="sim://?people=0", sinks=["jsonl:-", "jsonl://a.jsonl"], seconds=2, device="hall-2",
                            bundle="/opt/b", calibration="c.npz")
-    assert (o.source.url, o.sinks.urls, o.runtime.seconds, o.device.id) == ("sim://?people=0", ["jsonl:-", "jsonl://a.jsonl"], 2.0, "hall-2")
+    assert (o.source.url, o.sinks.urls, o.runtime.seconds, o.device.id) == (
+        "sim://?people=0", ["jsonl:-", "jsonl://a.jsonl"], 2.0, "hall-2")
     assert o.bundle_path() == Path("/opt/b") and o.calibration.file == "c.npz"
     assert cfg.source.url == "sim://?people=1"  # the original is unchanged
     with pytest.raises(ConfigError) as exc:

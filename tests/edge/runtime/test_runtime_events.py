@@ -2,9 +2,9 @@
 
 from dataclasses import replace
 
-from edge.runtime import Runtime
-
 from runtime_helpers import read_jsonl, sim_url
+
+from edge.runtime import Runtime
 
 
 def test_a_simulated_fall_raises_events_in_the_runtime_and_stopping_clears_them(config, tmp_path):
@@ -20,3 +20,15 @@ def test_a_simulated_fall_raises_events_in_the_runtime_and_stopping_clears_them(
     bodies = read_jsonl(tmp_path / "bodies.jsonl")
     assert bodies and all(r["schema"] == "cavatar.bodies/1" for r in bodies)  # events never mix into the bodies
     assert final["stages_ms"]["events"]["n"] > 0
+
+
+def test_outcome_callbacks_run_with_events_switched_off(config):
+    """on_outcome (cavatar score's capture, the demo's truth) must not depend on [events] enabled."""
+    cfg = config(people=1)
+    cfg = replace(cfg, events=replace(cfg.events, enabled=False))
+    rt = Runtime(cfg, say=lambda text: None)
+    outcomes = []
+    rt.on_outcome.append(outcomes.append)
+    rt.run_for(frames=20)
+    assert rt.events is None
+    assert len(outcomes) == 20 and all(o is not None for o in outcomes)

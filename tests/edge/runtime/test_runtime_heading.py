@@ -6,13 +6,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from scripted_stages import Calibrated, H, ScriptedScene, W, frame, person
 
 from edge.infer import ModelBundle
 from edge.infer.heading import yaw_rad
 from edge.runtime.config import default_bundle_path
 from edge.runtime.counters import FRAME_COUNTERS, PUBLISH_COUNTERS, WORK_COUNTERS, Counters, StageTimes
 from edge.runtime.stages import FrameStages
-from scripted_stages import H, W, Calibrated, ScriptedScene, frame, person
 
 
 @pytest.fixture(scope="module")

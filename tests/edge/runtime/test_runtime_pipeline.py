@@ -5,11 +5,11 @@ import json
 import jsonschema
 import numpy as np
 import pytest
+from runtime_helpers import read_jsonl
 
 from edge.record import load_schema
 from edge.runtime import Runtime
 from edge.runtime.status import read_status
-from runtime_helpers import read_jsonl
 
 
 def test_two_people_give_valid_records_with_increasing_seq(two_people_run):

@@ -9,7 +9,6 @@ import json
 import re
 
 import numpy as np
-
 from conftest import MARK_COUNT, MARK_KPA
 from runtime_helpers import finite_numbers, longest_number_array, pressure_keys, read_jsonl
 

@@ -3,10 +3,10 @@
 import json
 
 import pytest
+from runtime_helpers import read_jsonl
 
 from edge.runtime import Runtime, SetupError
 from edge.runtime.seq import SeqLedger, SeqLedgerBusy, SeqLedgerError
-from runtime_helpers import read_jsonl
 
 
 def test_a_crash_skips_to_the_end_of_the_reserved_block_never_back(tmp_path):

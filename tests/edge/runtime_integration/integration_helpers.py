@@ -10,9 +10,9 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from runtime_helpers import GRID, SEED  # the calibration fixture's carpet: sim://?seed=7, 96×96
 
 from edge.sources.base import Link, LinkLost
-from runtime_helpers import GRID, SEED  # the calibration fixture's carpet: sim://?seed=7, 96×96
 
 RATE_HZ = 14.0
 SCHEMA_PATH = Path(__file__).resolve().parents[3] / "edge" / "schema" / "bodies.schema.json"

@@ -12,12 +12,13 @@ import json
 import logging
 import time
 
+from integration_helpers import premade_board, wait_until
+from runtime_helpers import make_config
+
 from edge.cli.run import summary_line
 from edge.runtime import Runtime, RuntimeConfig
 from edge.topics import DeviceTopics
 from firmware_protocol.pty_board import PtyBoard
-from integration_helpers import premade_board, wait_until
-from runtime_helpers import make_config
 
 TIMEOUT_S = 1.0
 

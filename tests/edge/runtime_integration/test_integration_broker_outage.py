@@ -17,7 +17,6 @@ import json
 import time
 
 import pytest
-
 from integration_helpers import RATE_HZ, runtime_on_board, seq_report, wait_until
 from runtime_helpers import make_config
 from sink_helpers import Gate

@@ -14,7 +14,6 @@ import sys
 import time
 
 import pytest
-
 from integration_helpers import bodies_validator, wait_until
 from runtime_helpers import sim_url
 

@@ -16,11 +16,11 @@ import sys
 
 import numpy as np
 import pytest
+from integration_helpers import wait_until
+from runtime_helpers import sim_url
 
 from edge.cli import main
 from edge.runtime.config import default_bundle_path
-from integration_helpers import wait_until
-from runtime_helpers import sim_url
 
 EARLIER = {
     "bodies.jsonl": '{"schema":"cavatar.bodies/1","device":"carpet-01","seq":0,"time":1732240000.0,"model":"m@0","people":[]}\n',

@@ -12,11 +12,12 @@ tests/edge/sources/test_serial_usb_sources.py); the bus-powered board reboots on
 import threading
 import time
 
+from integration_helpers import premade_board, wait_until
+from runtime_helpers import make_config, read_jsonl
+
 from edge.runtime import Runtime
 from edge.runtime.status import read_status
 from firmware_protocol.pty_board import PtyBoard
-from integration_helpers import premade_board, wait_until
-from runtime_helpers import make_config, read_jsonl
 
 
 def test_unplug_for_a_second_and_replug_publishing_resumes_by_itself(tmp_path, sim_calibration, one_person_frames):

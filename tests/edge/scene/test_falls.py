@@ -5,8 +5,8 @@ from dataclasses import fields, replace
 import numpy as np
 import pytest
 
-from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
 from edge.runtime.events import EventStage
+from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
 
 RATE = 14.0
 FEET = dict(force_n=650.0, area_m2=0.035, length_m=0.55)

@@ -1,8 +1,8 @@
 """Filters: exact fast median, salt removal, force kept, masked fill, one-euro behaviour."""
 
 import numpy as np
-from scipy import ndimage
 from scene_worlds import noisy, render
+from scipy import ndimage
 
 from edge.scene import MaskedFill, OneEuroFilter, SceneConfig, SceneTracker, median3x3
 from edge.scene.filters import FilterChain

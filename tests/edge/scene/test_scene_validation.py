@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from cavatar_common.config import StrictConfig
 from edge.scene import REASONS, SceneConfig, SceneTracker
 
 PITCH = 0.01905
@@ -85,6 +86,11 @@ def test_config_rejects_unknown_keys_and_bad_values():
         SceneConfig.from_dict({"birth_frames": 1.5})
     with pytest.raises(ValueError, match="median_3x3"):
         SceneConfig.from_dict({"median_3x3": "yes"})
+    with pytest.raises(ValueError, match="noise_kpa must be > 0"):
+        SceneConfig.from_dict({"noise_kpa": 0})
+    with pytest.raises(ValueError, match="below their max_ counterparts"):
+        SceneConfig.from_dict({"min_pressure_kpa": 3000})
+    assert isinstance(SceneConfig(), StrictConfig) and SceneConfig.from_dict({"noise_kpa": None}).noise_kpa is None
     cfg = SceneConfig.from_dict({"group_radius_m": 1, "noise_kpa": 0.1, "temporal_median": True})
     assert cfg.group_radius_m == 1.0 and cfg.temporal_median and SceneConfig.from_dict(cfg.to_dict()) == cfg
     docs = SceneConfig.describe()

@@ -6,9 +6,9 @@ import re
 from pathlib import Path
 
 from edge.body import SMPL_JOINT_NAMES, SMPL_PARENTS
-from edge.runtime.config import default_bundle_path
-from edge.record import PERSON_KEYS
 from edge.ha_discovery import discovery
+from edge.record import PERSON_KEYS
+from edge.runtime.config import default_bundle_path
 from edge.topics import DeviceTopics
 
 DOCS = Path(__file__).resolve().parents[3] / "docs"

@@ -4,10 +4,9 @@ only its own rotated files (issue 18, finding 6)."""
 import json
 
 import pytest
+from sink_helpers import DEVICE, body_record
 
 from edge.sinks import SinkError, open_sink
-
-from sink_helpers import DEVICE, body_record
 
 
 def record_line(seq: int, device: str = DEVICE) -> bytes:

@@ -3,13 +3,12 @@
 import json
 
 import pytest
+from sink_helpers import DEVICE, Gate, body_record, wait_until
 
 from edge.record import RecordError
 from edge.runtime.events import event_payload
 from edge.sinks import open_sink
 from edge.topics import DeviceTopics
-
-from sink_helpers import DEVICE, Gate, body_record, wait_until
 
 T = DeviceTopics("cavatar", DEVICE)
 

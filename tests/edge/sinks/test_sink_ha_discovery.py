@@ -10,8 +10,7 @@ import jinja2
 import jsonschema
 import pytest
 
-from edge.ha_discovery import RUNTIME_STATES, entity_slug
-from edge.ha_discovery import discovery
+from edge.ha_discovery import RUNTIME_STATES, discovery, entity_slug
 from edge.topics import DeviceTopics, presence_payload
 
 SCHEMA = json.loads((Path(__file__).parent / "ha_discovery.schema.json").read_text())

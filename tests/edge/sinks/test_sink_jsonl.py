@@ -9,11 +9,10 @@ import time
 from pathlib import Path
 
 import pytest
+from sink_helpers import DEVICE, body_record
 
 from edge.record import check_record
 from edge.sinks import open_sink
-
-from sink_helpers import DEVICE, body_record
 
 REPO = Path(__file__).resolve().parents[3]
 

@@ -3,9 +3,10 @@ reason, retries are not; the connection that ends it is a WARNING too, so the jo
 
 import logging
 
+from sink_helpers import DEVICE, Broker, free_port, wait_until
+
 from edge.sinks import open_sink
 from edge.sinks.mqtt import unreachable_reason
-from sink_helpers import DEVICE, Broker, free_port, wait_until
 
 
 def warnings(caplog, text):

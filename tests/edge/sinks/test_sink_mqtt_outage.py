@@ -23,9 +23,9 @@ import os
 import threading
 import time
 
-from edge.sinks import open_sink
-
 from sink_helpers import Gate, body_record, wait_until
+
+from edge.sinks import open_sink
 
 RATE_HZ = 14.0
 BEFORE_S, AFTER_S = 1.5, 1.5

@@ -9,12 +9,11 @@ import time
 from pathlib import Path
 
 import pytest
-
-from edge.sinks import open_sink
-from edge.ha_discovery import discovery
-from edge.topics import DeviceTopics
-
 from sink_helpers import DEVICE, body_record, wait_until
+
+from edge.ha_discovery import discovery
+from edge.sinks import open_sink
+from edge.topics import DeviceTopics
 
 T = DeviceTopics("cavatar", DEVICE)
 REPO = Path(__file__).resolve().parents[3]

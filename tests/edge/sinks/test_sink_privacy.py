@@ -11,12 +11,11 @@ import re
 import jsonschema
 import numpy as np
 import pytest
+from sink_helpers import DEVICE, MODEL, body_record, wait_until
 
 from edge import record as R
 from edge.record import PrivacyError, RecordError
 from edge.sinks import open_sink
-
-from sink_helpers import DEVICE, MODEL, body_record, wait_until
 
 SMUGGLED_RECORDS = [
     ("top-level pressure_kpa", lambda r: r.update(pressure_kpa=[[1.0] * 96] * 96)),

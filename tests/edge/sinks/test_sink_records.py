@@ -7,10 +7,9 @@ import math
 import jsonschema
 import numpy as np
 import pytest
+from sink_helpers import DEVICE, MODEL, body_record
 
 from edge import record as R
-
-from sink_helpers import DEVICE, MODEL, body_record
 
 SCHEMA = R.load_schema()
 VALIDATOR = jsonschema.Draft202012Validator(SCHEMA)

@@ -3,10 +3,10 @@
 import json
 import time
 
+from sink_helpers import DEVICE, Gate, body_record, wait_until
+
 from edge.sinks import open_sink
 from edge.sinks.spool import Spool, min_bytes
-
-from sink_helpers import DEVICE, Gate, body_record, wait_until
 
 
 def line(seq: int) -> str:

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from edge import topics
-from edge.sinks import jsonl, mqtt
 from edge.ha_discovery import discovery
+from edge.sinks import jsonl, mqtt
 from edge.topics import DeviceTopics
 
 REPO = Path(__file__).resolve().parents[3]

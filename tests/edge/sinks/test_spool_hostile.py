@@ -6,12 +6,11 @@ import json
 import os
 
 import pytest
+from sink_helpers import DEVICE, body_record
 
 import edge.sinks.spool as spool_module
 from edge.sinks import open_sink
 from edge.sinks.spool import Spool, min_bytes
-
-from sink_helpers import DEVICE, body_record
 
 
 def line(seq: int, device: str = DEVICE) -> str:

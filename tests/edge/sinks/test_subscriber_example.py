@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import paho.mqtt.publish as publish
+from sink_helpers import DEVICE, body_record
 
 from edge.body import SMPL_JOINT_NAMES
 from edge.topics import DeviceTopics
-from sink_helpers import DEVICE, body_record
 
 EXAMPLE = Path(__file__).resolve().parents[3] / "docs" / "examples" / "subscriber.py"
 

@@ -4,7 +4,6 @@ The default carpet (96×96, 12-bit packed, 14 Hz) streams; the board is unplugge
 plugged back; frames must flow again within 2 s with no restart of the source.
 """
 
-import threading
 import time
 
 import numpy as np

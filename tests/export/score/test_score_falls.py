@@ -61,7 +61,8 @@ def test_the_score_names_its_path_and_refuses_a_mixed_clip_file(tmp_path):
 
 
 def test_the_clip_simulator_refuses_an_unknown_scenario(tmp_path, capsys):
-    from export.score.falls_clips import clip_list, main as clips_main
+    from export.score.falls_clips import clip_list
+    from export.score.falls_clips import main as clips_main
 
     with pytest.raises(SystemExit):
         clips_main([str(tmp_path / "c.jsonl"), "0", "--what", "slow_collapse,slow_colapse"])
