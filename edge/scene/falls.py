@@ -356,16 +356,17 @@ class FallDetector:
             if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
                 runs.append([])
             runs[-1].append(r)
+        landed = min(landed_length_m, b.length_m)
         for run in runs:
             end_t = run[0][0]
             if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
                 where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
-                if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m or self._collapsed(start_t, end_t, run, min(landed_length_m, b.length_m), b):
+                if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m or self._collapsed(start_t, end_t, run, landed, b):
                     return start_t - end_t
                 return None
             if self._seated(run, b):  # feet under a chair: the whole weight came down onto the floor
                 return start_t - end_t
-            if self._collapsed(start_t, end_t, run, min(landed_length_m, b.length_m), b):  # stood, then went down through a light kneel
+            if self._collapsed(start_t, end_t, run, landed, b):  # stood, then went down through a light kneel
                 return start_t - end_t
             # lighter than the body now lying and not seated: the body in the air, a hand: look further back
         return None
