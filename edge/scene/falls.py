@@ -21,7 +21,7 @@ from where the body then lies: the time since the last stance nearby (within fal
 that stance stood at least min_shift_m away (the load moved by about a body's height: sitting down, or
 a bag dropped or a pet lying down beside a standing person, moves it less) carrying at least
 1/max_load_ratio of the lying load, or if the body crumpled where it stood (down within collapse_window_s,
-now lying at full length, collapse_min_length_m, and nobody still standing in it) — or if it was
+at full length from landing on, collapse_min_length_m, and nobody still standing in it) — or if it was
 someone seated on a chair beside the carpet (a still,
 steady, light print for seated_s, at most 1/seated_load_ratio of the lying load: their weight arriving
 on the floor is a fall wherever it lands). ``fall`` is raised once the episode
@@ -98,8 +98,9 @@ class FallConfig(StrictConfig):
                                        "this of the stance ending ...")
     collapse_s: float = _f(4.0, "... having carried a standing load at most this before landing (a deliberate "
                                 "lie-down stays low, kneeling or sitting, for longer) ...")
-    collapse_min_length_m: float = _f(1.2, "... and lies at full length, pressure length at least this (sitting or "
-                                            "kneeling on the floor, or a bag or a pet beside someone's feet, is shorter)")
+    collapse_min_length_m: float = _f(1.2, "... and landed at full length, pressure length at least this from landing "
+                                            "on (sitting, kneeling, getting down for a push-up, or a bag or a pet beside "
+                                            "someone's feet, is shorter)")
     max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this (lighter: the body was "
                                     "in the air)")
     seated_s: float = _f(1.5, "a still, light footprint held this long is someone seated on a chair beside the carpet "
@@ -226,6 +227,7 @@ class _Episode:
     down: bool = False
     fall_conf: float = 0.0
     judged: bool = False
+    landed_length_m: float = np.inf  # the shortest the body was from landing until judged
 
 
 class FallDetector:
@@ -299,6 +301,8 @@ class FallDetector:
                 ep.exercise_s += min(max(t_s - ep.last_t, 0.0), 0.25)  # the model says exercise AND the body moves
                 ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
             ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
+            if not ep.judged:
+                ep.landed_length_m = min(ep.landed_length_m, b.length_m)
             ep.track_ids |= set(b.track_ids)
             seen.add(id(ep))
             events += self._advance(ep, t_s, b)
@@ -342,7 +346,7 @@ class FallDetector:
                      or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2
                          and b.force_n <= 1e3 * c.floor_long_max_kpa * b.area_m2)))
 
-    def _arrival(self, start_t: float, b: BodyFeatures) -> float | None:
+    def _arrival(self, start_t: float, b: BodyFeatures, landed_length_m: float = np.inf) -> float | None:
         """Seconds from the last stance nearby to landing at start_t, judged from where the landed body ``b``
         lies (see the module doc); None: no fall-like arrival within down_window_s."""
         c = self.config
@@ -352,28 +356,31 @@ class FallDetector:
             if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
                 runs.append([])
             runs[-1].append(r)
+        landed = min(landed_length_m, b.length_m)
         for run in runs:
             end_t = run[0][0]
             if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
                 where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
-                if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m or self._collapsed(start_t, end_t, run, b):
+                if float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m or self._collapsed(start_t, end_t, run, landed, b):
                     return start_t - end_t
                 return None
             if self._seated(run, b):  # feet under a chair: the whole weight came down onto the floor
                 return start_t - end_t
-            if self._collapsed(start_t, end_t, run, b):  # stood, then went down through a light kneel
+            if self._collapsed(start_t, end_t, run, landed, b):  # stood, then went down through a light kneel
                 return start_t - end_t
             # lighter than the body now lying and not seated: the body in the air, a hand: look further back
         return None
 
-    def _collapsed(self, start_t: float, end_t: float, run: list, b: BodyFeatures) -> bool:
+    def _collapsed(self, start_t: float, end_t: float, run: list, landed_length_m: float, b: BodyFeatures) -> bool:
         """Someone who crumpled where they stood (knees giving way, then over to the side): the stance ``run``
         (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
         load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
-        reads light; a deliberate lie-down stays low for longer); ``b`` lies at full length and none of its
-        tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
+        reads light; a deliberate lie-down stays low for longer); the body landed at full length and stayed
+        so (``landed_length_m``, its shortest since landing, at least collapse_min_length_m: a push-up gets
+        down onto hands and feet first, then stretches into the plank), and none of its tracks is still
+        standing (the feet of someone beside a dropped bag or a pet lying down)."""
         c = self.config
-        if start_t - end_t > c.collapse_window_s or b.length_m < c.collapse_min_length_m:
+        if start_t - end_t > c.collapse_window_s or landed_length_m < c.collapse_min_length_m:
             return False
         if any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
             return False
@@ -404,7 +411,7 @@ class FallDetector:
         tid = min(ep.track_ids)
         if not ep.judged and held >= c.confirm_s:  # judged once landed: from where the body now lies
             ep.judged = True
-            ep.arrival_s = self._arrival(ep.start_t, b)
+            ep.arrival_s = self._arrival(ep.start_t, b, ep.landed_length_m)
         if not ep.fall and ep.arrival_s is not None and ep.arrival_s <= c.fall_window_s and held >= c.confirm_s:
             ep.fall = True
             ep.fall_conf = round(float(np.clip(1.0 - 0.5 * ep.arrival_s / max(c.fall_window_s, 1e-6), 0.5, 1.0)), 3)

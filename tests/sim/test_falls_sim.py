@@ -87,7 +87,9 @@ def test_a_simulated_backward_fall_raises_fall_and_person_down(body):
     raised = {k: t for k, s, t in ev if s == "raised"}
     assert set(raised) == {"fall", "person_down"}
     assert 0 <= raised["fall"] - truth["impact_s"] <= 3.0
-    assert 3.0 <= raised["person_down"] - truth["impact_s"] <= 5.0
+    # person_down_s after the body first lay on the floor, which can come a little before the truth's impact
+    # (the end of the toppling key): a hip or a shoulder lands first
+    assert 2.5 <= raised["person_down"] - truth["impact_s"] <= 5.0
 
 
 def test_lying_down_on_purpose_raises_nothing(body):

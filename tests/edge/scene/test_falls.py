@@ -76,16 +76,20 @@ def test_a_slow_collapse_where_they_stood_is_a_fall():
     assert 0 < ev[0][2] - 4.9 <= 1.0
 
 
-@pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "still_standing"])
+@pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "plank", "still_standing"])
 def test_going_down_in_place_without_collapsing_is_no_fall(case):
     """In place, but: low for longer before lying (a deliberate lie-down), the body sitting rather than at full
-    length, or the feet of someone still standing inside what lies there."""
+    length, a push-up (short on hands and feet first, then stretched into the plank), or the feet of someone
+    still standing inside what lies there."""
     a = np.array([0.9, 0.6])
     lying = body([1, 2], a + (0.15, 0.25), **LONG)
     if case == "kneel_long":
         script = [(3.0, [body([1], a, **FEET)]), (5.0, [body([1], a, **KNEEL)]), (0.1, []), (34.0, [lying])]
     elif case == "sit_first":
         script = [(3.0, [body([1], a, **FEET)]), (1.5, [body([1], a + (0, 0.2), **SITTING)]), (34.0, [lying])]
+    elif case == "plank":  # down onto hands and feet, then stretched into a push-up's plank: as long as lying
+        crouch = body([1], a + (0.05, 0.1), force_n=650.0, area_m2=0.057, length_m=0.65)
+        script = [(3.0, [body([1], a, **FEET)]), (0.4, [crouch]), (34.0, [body([1], a + (0.15, 0.25), **LONG)])]
     elif case == "short":
         script = [(3.0, [body([1], a, **FEET)]), (0.3, []), (34.0, [body([1, 2], a + (0.15, 0.25), **dict(LONG, length_m=1.1))])]
     else:  # a bag beside the feet of someone who has stood there all along: a long print, no fall
