@@ -317,12 +317,13 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
     if excess is None or len(centres_m) < 2:
         return None
     total = float(forces_n.sum())
+    weight_n = float(body.weight_n or 0.0)  # known: _excess_n returns None while it is not
 
     def carries(f: float) -> bool:  # carries the excess
         return f >= max(min_person_force_n, 0.5 * excess)
 
     def keeps(f: float) -> bool:  # the rest still carries the body: f took no weight from it (a back put down does)
-        return total - f >= max(min_person_force_n, KEEP_FRACTION * body.weight_n)
+        return total - f >= max(min_person_force_n, KEEP_FRACTION * weight_n)
 
     idx = np.flatnonzero(recent)
     parts = []

@@ -9,7 +9,16 @@ import pytest
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, Subject, person_track
-from sim.motion.balance import FOOT_COP_FRAC, G_M_S2, HEEL_COP_FRAC, ROLL_DEG, ROLL_FRAC, TOES_COP_FRAC, left_weight, zmp_com
+from sim.motion.balance import (
+    FOOT_COP_FRAC,
+    G_M_S2,
+    HEEL_COP_FRAC,
+    ROLL_DEG,
+    ROLL_FRAC,
+    TOES_COP_FRAC,
+    left_weight,
+    zmp_com,
+)
 from sim.motion.rig import LF, RF, Rig
 from sim.motion.swing import CLEARANCE_M, swing_ankle_path, swing_spans
 
