@@ -3,7 +3,7 @@
 # the evaluation tables. Every step is skipped when its output exists and training resumes from
 # its checkpoint, so an interrupted run continues where it stopped.
 #
-#   WORK=~/.cache/cavatar-model  where datasets and runs go (≈ 2.5 GB)
+#   WORK=~/.cache/cavatar-model  where datasets and runs go (≈ 4 GB)
 #   BUNDLE=edge/models/lean-96   the bundle written; EVAL=docs/model  the tables written
 #   STEPS_FRAMES / STEPS_HEAD    training steps of the two stages
 #
@@ -26,33 +26,41 @@ gen() {  # gen NAME ARGS...: one dataset, unless it is complete already
   local name=$1; shift
   [ -f "$D/$name/manifest.json" ] || { rm -rf "$D/$name"; "$CAVATAR" sim generate --out "$D/$name" --workers 2 "$@"; }
 }
-# 48 subjects (seed 2): 38 train, 5 val (model selection), 5 test; the 12-subject long set (seed 0);
-# two- and three-person scenes of seed 0's training subjects; a held-out multi-person set (seed 101).
-gen many48 --subjects 48 --seconds-per-activity 10 --people 1 --seed 2
-gen train100k --subjects 12 --seconds-per-activity 60 --people 1 --seed 0
-gen multi_train --subjects 12 --seconds-per-activity 20 --people 2..3 --seed 0
-gen multi_eval --subjects 6 --seconds-per-activity 10 --people 1..3 --seed 101
+# Every dataset carries its carpets' installer calibrations, and training reads the board's path (raw
+# sensor-model counts → calibration.apply → kPa, floored and clipped as the runtime does: --input board).
+# 96 subjects (seed 2): ~77 train, ~10 val (model selection), ~9 test; two- and three-person scenes of
+# seed 0's subjects; a held-out multi-person set (seed 101).
+CAL=(--calibration installer)
+gen many96 --subjects 96 --seconds-per-activity 8 --people 1 --seed 2 "${CAL[@]}"
+gen multi_train --subjects 12 --seconds-per-activity 15 --people 2..3 --seed 0 "${CAL[@]}"
+gen multi_eval --subjects 6 --seconds-per-activity 10 --people 1..3 --seed 101 "${CAL[@]}"
+gen unseen888 --subjects 4 --seconds-per-activity 6 --seed 888 "${CAL[@]}"
 
-DATA=(--data "$D/many48" --data "$D/train100k" --data "$D/multi_train")
-"$CAVATAR" train --stage frames "${DATA[@]}" --out "$R/frames" --steps "$STEPS_FRAMES" --batch 128 --lr 1e-3 \
+DATA=(--data "$D/many96" --data "$D/multi_train")
+"$CAVATAR" train --stage frames --input board "${DATA[@]}" --out "$R/frames" --steps "$STEPS_FRAMES" --batch 128 --lr 1e-3 \
   --lr-schedule cosine --optimizer adamw --threads 1 --val-every 500 --checkpoint-every 100 --resume
-"$CAVATAR" train --stage head --data "$D/many48" --data "$D/multi_train" --init "$R/frames/best.pt" --out "$R/head" --steps "$STEPS_HEAD" --batch 64 --cache-copies 4 \
+"$CAVATAR" train --stage head --input board "${DATA[@]}" --init "$R/frames/best.pt" --out "$R/head" --steps "$STEPS_HEAD" --batch 64 --cache-copies 4 \
   --lr 1e-3 --lr-schedule cosine --optimizer adamw --threads 2 --val-every 500 --checkpoint-every 100 --resume
 
-"$CAVATAR" bundle "$R/head/best.pt" --data "$D/many48" --out "$BUNDLE" --name lean-96
+"$CAVATAR" bundle "$R/head/best.pt" --data "$D/many96" --out "$BUNDLE" --name lean-96
 # The heading resolver's parameters (edge/infer/heading.json), fitted on the board's path (raw counts →
 # each carpet's installer calibration) of its own subjects, seed 5151; also `make heading` alone.
-gen heading5151 --subjects 6 --seconds-per-activity 8 --seed 5151 --calibration installer
+gen heading5151 --subjects 6 --seconds-per-activity 8 --seed 5151 "${CAL[@]}"
 "$PY" -m export.heading_cue --bundle "$BUNDLE" --data "$D/heading5151" --board --out edge/infer/heading.json
-"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --data "$D/train100k" --split test --out "$EVAL/eval-test" \
-  --title "lean-96 int8 on unseen subjects (one person)"
+for INPUT in clean board; do
+  SUFFIX=$([ "$INPUT" = board ] && echo "-board" || true)
+  "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many96" --split test --input "$INPUT" --out "$EVAL/eval-test$SUFFIX" \
+    --title "lean-96 int8 on the 10 unseen subjects of seed 2 (one person), input: $INPUT"
+  "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/unseen888" --split all --input "$INPUT" --out "$EVAL/eval-unseen-888$SUFFIX" \
+    --title "lean-96 int8, heading resolved, on 4 unseen subjects (seed 888), input: $INPUT"
+done
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 2..3 --out "$EVAL/eval-multi" \
   --title "lean-96 int8 on unseen subjects, two and three people"
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/multi_eval" --split all --people 1 --out "$EVAL/eval-new6-alone" \
   --title "lean-96 int8 on six more unseen subjects (seed 101), alone"
-"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many48" --protocol seen-time --out "$EVAL/eval-seen-time" \
+"$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many96" --protocol seen-time --out "$EVAL/eval-seen-time" \
   --title "lean-96 int8, the paper's protocol (training subjects of seed 2, last 10 % in time)"
 "$PY" -m export.tables --readme README.md "unseen=$EVAL/eval-test.json" "seen-time=$EVAL/eval-seen-time.json"
-"$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many48" --split test --subject s12 --subject s17 \
+"$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many96" --split test --subject s19 --subject s25 \
   --fractions 0,0.1,0.3,0.6 --steps 300 --lr 3e-4 --stage head --precision fp32 --out "$EVAL/finetune"
 echo "bundle: $BUNDLE; tables: $EVAL/eval-test.md, $EVAL/eval-multi.md, $EVAL/finetune.md"
