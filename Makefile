@@ -58,7 +58,7 @@ bench: test-deps
 	$(PY) -m bench.scene_pipeline
 	$(PY) -m bench.calibration_runtime
 	$(PY) -m bench.runtime_latency
-	$(PY) -m bench.speed_error $(foreach d,many48 train100k,$(if $(wildcard $(MODEL_DATA)/$(d)/manifest.json),--data $(MODEL_DATA)/$(d)))
+	$(PY) -m bench.speed_error $(foreach d,many96,$(if $(wildcard $(MODEL_DATA)/$(d)/manifest.json),--data $(MODEL_DATA)/$(d)))
 	$(PY) -m bench.readme_perf
 
 # What the board publishes, scored against the virtual carpet's truth (issue 12): the standard scene set

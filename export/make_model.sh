@@ -60,7 +60,8 @@ done
   --title "lean-96 int8 on six more unseen subjects (seed 101), alone"
 "$CAVATAR" eval --bundle "$BUNDLE" --data "$D/many96" --protocol seen-time --out "$EVAL/eval-seen-time" \
   --title "lean-96 int8, the paper's protocol (training subjects of seed 2, last 10 % in time)"
-"$PY" -m export.tables --readme README.md "unseen=$EVAL/eval-test.json" "seen-time=$EVAL/eval-seen-time.json"
+"$PY" -m export.tables --readme README.md "unseen=$EVAL/eval-test.json" \
+  "unseen, board's path=$EVAL/eval-test-board.json" "seen-time=$EVAL/eval-seen-time.json"
 "$PY" -m export.sweep --bundle "$BUNDLE" --data "$D/many96" --split test --subject s19 --subject s25 \
   --fractions 0,0.1,0.3,0.6 --steps 300 --lr 3e-4 --stage head --precision fp32 --out "$EVAL/finetune"
 echo "bundle: $BUNDLE; tables: $EVAL/eval-test.md, $EVAL/eval-multi.md, $EVAL/finetune.md"
