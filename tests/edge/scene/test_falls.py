@@ -76,6 +76,27 @@ def test_a_slow_collapse_where_they_stood_is_a_fall():
     assert 0 < ev[0][2] - 4.9 <= 1.0
 
 
+def test_a_collapse_measured_short_for_one_frame_while_landing_is_still_a_fall():
+    """The scene re-segments the landing body for one frame (1.1 m between 1.7 m and 1.5 m): a posture lasts
+    longer than a frame, so the body still landed at full length."""
+    a = np.array([0.9, 0.6])
+    script = [(3.0, [body([1], a, **FEET)]), (1.8, [body([1], a, **KNEEL)]), (0.1, []),
+              (1 / RATE, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=1.7))]),
+              (1 / RATE, [body([2], a + (0.1, 0.2), **dict(LONG, length_m=1.1))]),
+              (34.0, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=1.5))])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_plank_at_full_length_from_the_first_frame_is_no_collapse():
+    """Straight into a push-up's plank, long from its first frame on: hands and feet 2.1 m apart touch the floor
+    on 0.04 m² (0.019 m² per metre; a body lying touches along its length), so it is no collapse."""
+    a = np.array([0.9, 0.6])
+    plank = body([2], a + (0.15, 0.25), force_n=300.0, area_m2=0.04, length_m=2.1)
+    ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.2, []), (34.0, [plank])])
+    assert ev == []
+
+
 @pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "plank", "still_standing"])
 def test_going_down_in_place_without_collapsing_is_no_fall(case):
     """In place, but: low for longer before lying (a deliberate lie-down), the body sitting rather than at full
