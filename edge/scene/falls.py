@@ -294,6 +294,7 @@ class FallDetector:
             if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
                                and b.length_m <= c.feet_max_length_m):
                 self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
+                self._back_on_feet(b)
                 continue
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
@@ -344,6 +345,15 @@ class FallDetector:
             if d <= dist or ep.track_ids & set(b.track_ids):
                 best, dist = ep, min(d, dist)
         return best
+
+    def _back_on_feet(self, b: BodyFeatures) -> None:
+        """A body whose tracks have stood on their feet for STANDING_APART_S is up: an episode of theirs that never
+        lasted confirm_s on the floor was no landing (feet flattened for a moment as the knees gave way) and ends
+        now, so that the real landing is judged afresh, not absorbed into it."""
+        if not any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
+            return
+        self._episodes = [ep for ep in self._episodes
+                          if ep.judged or not ep.track_ids & set(b.track_ids)]
 
     def _lying(self, b: BodyFeatures) -> bool:
         """A person's body on the floor: a large or a long footprint, pressed like an adult's weight (not a pet's)."""

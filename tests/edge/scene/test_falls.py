@@ -267,6 +267,21 @@ def test_a_lying_body_seen_as_two_tracks_stays_one_body_and_one_fall():
     assert [(e["type"], e["state"]) for e in events] == [("fall", "raised"), ("person_down", "raised")]
 
 
+def test_a_footprint_flattened_for_a_moment_then_a_collapse_is_one_fall():
+    """As the knees start to give way the feet flatten (0.051 m² for two frames, read as on the floor), the body
+    kneels on a light print for 1.5 s, then goes over at full length: the first, short-lived landing ended when
+    they were back on their feet, so the real landing is judged afresh."""
+    det, events, t = FallDetector(), [], 0.0
+    script = [(3.0, ob(1, 540.0, 0.042, (1.0, 0.8), 0.69)), (2 / RATE, ob(1, 620.0, 0.051, (1.0, 0.82), 0.69)),
+              (1.5, ob(1, 220.0, 0.016, (1.0, 0.8), 0.66)), (35.0, ob(1, 620.0, 0.069, (1.2, 0.9), 1.95))]
+    for seconds, o in script:
+        for _ in range(int(round(seconds * RATE))):
+            events += det.step_observations(t, [o], {})
+            t += 1 / RATE
+    assert [(e["type"], e["state"]) for e in events] == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < events[0]["t_s"] - (3.0 + 2 / RATE + 1.5) <= 1.0
+
+
 def test_person_down_delay_is_configurable():
     ev, _ = run(fall_script(0.5, 12.0, up=False), replace(FallConfig(), person_down_s=10.0))
     t_down = [t for k, s, t, _ in ev if (k, s) == ("person_down", "raised")]
