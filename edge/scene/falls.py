@@ -50,7 +50,7 @@ SEATED_STILL_M = 0.05  # a seated person's feet stay within this of where they r
 SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
 STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
 STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
-LANDED_FRAMES = 3  # the landed length is the median of this many frames: a landing body re-segmented for a frame
+LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames (a body re-segmented for a frame)
 
 
 def _f(default, doc: str):
@@ -102,9 +102,6 @@ class FallConfig(StrictConfig):
     collapse_min_length_m: float = _f(1.2, "... and landed at full length, pressure length at least this from landing "
                                             "on (sitting, kneeling, getting down for a push-up, or a bag or a pet beside "
                                             "someone's feet, is shorter)")
-    collapse_min_width_m: float = _f(0.03, "... and touching the floor along that length: contact area per metre of "
-                                           "pressure length at least this (lying ≈ 0.035–0.07 m²/m; a push-up's plank "
-                                           "touches with hands and feet only, ≈ 0.02) ...")
     max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this (lighter: the body was "
                                     "in the air)")
     seated_s: float = _f(1.5, "a still, light footprint held this long is someone seated on a chair beside the carpet "
@@ -231,7 +228,7 @@ class _Episode:
     down: bool = False
     fall_conf: float = 0.0
     judged: bool = False
-    landed_length_m: float = np.inf  # the shortest the body was from landing until judged (LANDED_FRAMES median)
+    landed_length_m: float = np.inf  # the shortest the body was from landing until judged (median-filtered)
     lengths: deque = field(default_factory=lambda: deque(maxlen=LANDED_FRAMES))  # its latest lengths
 
 
@@ -307,9 +304,9 @@ class FallDetector:
                 ep.exercise_s += min(max(t_s - ep.last_t, 0.0), 0.25)  # the model says exercise AND the body moves
                 ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
             ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
-            if not ep.judged:  # a posture holds for frames; one frame measured short is the landing re-segmented
-                ep.lengths.append(b.length_m)
-                if len(ep.lengths) == LANDED_FRAMES or t_s - ep.start_t >= c.confirm_s:
+            if not ep.judged:  # median-filtered over 3 frames: a one-frame dip between longer ones is the
+                ep.lengths.append(b.length_m)  # landing re-segmented; the first frame (an edge) counts as it is
+                if len(ep.lengths) in (1, LANDED_FRAMES):
                     ep.landed_length_m = min(ep.landed_length_m, float(np.median(ep.lengths)))
             ep.track_ids |= set(b.track_ids)
             seen.add(id(ep))
@@ -393,14 +390,11 @@ class FallDetector:
         (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
         load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
         reads light; a deliberate lie-down stays low for longer); the body landed at full length and stayed
-        so (``landed_length_m``, its shortest since landing over LANDED_FRAMES frames, at least
-        collapse_min_length_m: a push-up gets down onto hands and feet first, then stretches into the plank),
-        touching the floor along that length (collapse_min_width_m: not a plank on hands and feet), and none
-        of its tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
+        so (``landed_length_m``, its shortest since landing, median-filtered over LANDED_FRAMES frames, at least
+        collapse_min_length_m: a push-up gets down onto hands and feet first, then stretches into the plank), and
+        none of its tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
         c = self.config
         if start_t - end_t > c.collapse_window_s or landed_length_m < c.collapse_min_length_m:
-            return False
-        if b.area_m2 < c.collapse_min_width_m * b.length_m:  # a plank on hands and feet, not a body lying
             return False
         if any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
             return False

@@ -88,12 +88,13 @@ def test_a_collapse_measured_short_for_one_frame_while_landing_is_still_a_fall()
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
-def test_a_plank_at_full_length_from_the_first_frame_is_no_collapse():
-    """Straight into a push-up's plank, long from its first frame on: hands and feet 2.1 m apart touch the floor
-    on 0.04 m² (0.019 m² per metre; a body lying touches along its length), so it is no collapse."""
+def test_a_push_up_short_for_its_first_frame_only_is_no_collapse():
+    """Down onto hands and feet and straight into the plank: 1.0 m for the first frame on the floor, then longer
+    every frame. The first frame is an edge, not a dip between longer ones: it touched down short."""
     a = np.array([0.9, 0.6])
-    plank = body([2], a + (0.15, 0.25), force_n=300.0, area_m2=0.04, length_m=2.1)
-    ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.2, []), (34.0, [plank])])
+    script = [(3.0, [body([1], a, **FEET)]), (0.2, [])]
+    script += [(1 / RATE, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=n))]) for n in (1.0, 1.27, 1.58, 1.9)]
+    ev, _ = run(script + [(34.0, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=2.1))])])
     assert ev == []
 
 
