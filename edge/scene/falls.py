@@ -35,7 +35,7 @@ stopped).
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
@@ -50,6 +50,7 @@ SEATED_STILL_M = 0.05  # a seated person's feet stay within this of where they r
 SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
 STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
 STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
+LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames (a body re-segmented for a frame)
 
 
 def _f(default, doc: str):
@@ -227,7 +228,8 @@ class _Episode:
     down: bool = False
     fall_conf: float = 0.0
     judged: bool = False
-    landed_length_m: float = np.inf  # the shortest the body was from landing until judged
+    landed_length_m: float = np.inf  # the shortest the body was from landing until judged (median-filtered)
+    lengths: deque = field(default_factory=lambda: deque(maxlen=LANDED_FRAMES))  # its latest lengths
 
 
 class FallDetector:
@@ -289,6 +291,7 @@ class FallDetector:
             if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
                                and b.length_m <= c.feet_max_length_m):
                 self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
+                self._back_on_feet(b)
                 continue
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
@@ -301,8 +304,10 @@ class FallDetector:
                 ep.exercise_s += min(max(t_s - ep.last_t, 0.0), 0.25)  # the model says exercise AND the body moves
                 ep.exercise = ep.exercise or ep.exercise_s >= c.exercise_s
             ep.last_t, ep.centre_m, ep.area_m2 = t_s, b.centre_m, b.area_m2
-            if not ep.judged:
-                ep.landed_length_m = min(ep.landed_length_m, b.length_m)
+            if not ep.judged:  # median-filtered over 3 frames: a one-frame dip between longer ones is the
+                ep.lengths.append(b.length_m)  # landing re-segmented; the first frame (an edge) counts as it is
+                if len(ep.lengths) in (1, LANDED_FRAMES):
+                    ep.landed_length_m = min(ep.landed_length_m, float(np.median(ep.lengths)))
             ep.track_ids |= set(b.track_ids)
             seen.add(id(ep))
             events += self._advance(ep, t_s, b)
@@ -338,6 +343,15 @@ class FallDetector:
                 best, dist = ep, min(d, dist)
         return best
 
+    def _back_on_feet(self, b: BodyFeatures) -> None:
+        """A body whose tracks have stood on their feet for STANDING_APART_S is up: an episode of theirs that never
+        lasted confirm_s on the floor was no landing (feet flattened for a moment as the knees gave way) and ends
+        now, so that the real landing is judged afresh, not absorbed into it."""
+        if not any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids):
+            return
+        self._episodes = [ep for ep in self._episodes
+                          if ep.judged or not ep.track_ids & set(b.track_ids)]
+
     def _lying(self, b: BodyFeatures) -> bool:
         """A person's body on the floor: a large or a long footprint, pressed like an adult's weight (not a pet's)."""
         c = self.config
@@ -356,7 +370,7 @@ class FallDetector:
             if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
                 runs.append([])
             runs[-1].append(r)
-        landed = min(landed_length_m, b.length_m)
+        landed = landed_length_m if np.isfinite(landed_length_m) else b.length_m
         for run in runs:
             end_t = run[0][0]
             if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
@@ -376,9 +390,9 @@ class FallDetector:
         (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
         load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
         reads light; a deliberate lie-down stays low for longer); the body landed at full length and stayed
-        so (``landed_length_m``, its shortest since landing, at least collapse_min_length_m: a push-up gets
-        down onto hands and feet first, then stretches into the plank), and none of its tracks is still
-        standing (the feet of someone beside a dropped bag or a pet lying down)."""
+        so (``landed_length_m``, its shortest since landing, median-filtered over LANDED_FRAMES frames, at least
+        collapse_min_length_m: a push-up gets down onto hands and feet first, then stretches into the plank), and
+        none of its tracks is still standing (the feet of someone beside a dropped bag or a pet lying down)."""
         c = self.config
         if start_t - end_t > c.collapse_window_s or landed_length_m < c.collapse_min_length_m:
             return False

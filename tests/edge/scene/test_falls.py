@@ -76,6 +76,28 @@ def test_a_slow_collapse_where_they_stood_is_a_fall():
     assert 0 < ev[0][2] - 4.9 <= 1.0
 
 
+def test_a_collapse_measured_short_for_one_frame_while_landing_is_still_a_fall():
+    """The scene re-segments the landing body for one frame (1.1 m between 1.7 m and 1.5 m): a posture lasts
+    longer than a frame, so the body still landed at full length."""
+    a = np.array([0.9, 0.6])
+    script = [(3.0, [body([1], a, **FEET)]), (1.8, [body([1], a, **KNEEL)]), (0.1, []),
+              (1 / RATE, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=1.7))]),
+              (1 / RATE, [body([2], a + (0.1, 0.2), **dict(LONG, length_m=1.1))]),
+              (34.0, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=1.5))])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_push_up_short_for_its_first_frame_only_is_no_collapse():
+    """Down onto hands and feet and straight into the plank: 1.0 m for the first frame on the floor, then longer
+    every frame. The first frame is an edge, not a dip between longer ones: it touched down short."""
+    a = np.array([0.9, 0.6])
+    script = [(3.0, [body([1], a, **FEET)]), (0.2, [])]
+    script += [(1 / RATE, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=n))]) for n in (1.0, 1.27, 1.58, 1.9)]
+    ev, _ = run(script + [(34.0, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=2.1))])])
+    assert ev == []
+
+
 @pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "plank", "still_standing"])
 def test_going_down_in_place_without_collapsing_is_no_fall(case):
     """In place, but: low for longer before lying (a deliberate lie-down), the body sitting rather than at full
@@ -244,6 +266,21 @@ def test_a_lying_body_seen_as_two_tracks_stays_one_body_and_one_fall():
         events += det.step_observations(t, parts, {})
         t += 1 / RATE
     assert [(e["type"], e["state"]) for e in events] == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_footprint_flattened_for_a_moment_then_a_collapse_is_one_fall():
+    """As the knees start to give way the feet flatten (0.051 m² for two frames, read as on the floor), the body
+    kneels on a light print for 1.5 s, then goes over at full length: the first, short-lived landing ended when
+    they were back on their feet, so the real landing is judged afresh."""
+    det, events, t = FallDetector(), [], 0.0
+    script = [(3.0, ob(1, 540.0, 0.042, (1.0, 0.8), 0.69)), (2 / RATE, ob(1, 620.0, 0.051, (1.0, 0.82), 0.69)),
+              (1.5, ob(1, 220.0, 0.016, (1.0, 0.8), 0.66)), (35.0, ob(1, 620.0, 0.069, (1.2, 0.9), 1.95))]
+    for seconds, o in script:
+        for _ in range(int(round(seconds * RATE))):
+            events += det.step_observations(t, [o], {})
+            t += 1 / RATE
+    assert [(e["type"], e["state"]) for e in events] == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < events[0]["t_s"] - (3.0 + 2 / RATE + 1.5) <= 1.0
 
 
 def test_person_down_delay_is_configurable():
