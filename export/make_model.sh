@@ -8,7 +8,7 @@
 #   STEPS_FRAMES / STEPS_HEAD    training steps of the two stages
 #
 # Measured on the 2-core CPU machine this project develops on (shared with other work): data ≈ 30 min,
-# frames stage ≈ 40 min (0.65 s/step), head stage ≈ 15 min (feature cache 6 min), bundle 2 min,
+# frames stage ≈ 55 min (0.93 s/step on the board's path), head stage ≈ 20 min (with its feature cache), bundle 2 min,
 # tables and the fine-tuning sweep ≈ 15 min. With CUDA, training uses the GPU.
 set -euo pipefail
 CAVATAR=${CAVATAR:-.venv/bin/cavatar}
