@@ -53,7 +53,7 @@ def test_floor_exercises_get_down_and_up_under_control_when_the_sequence_holds_t
     """Getting down to the floor, the repetitions and getting up are paced, and the
     repetitions fill only what the paced getting down and up leave: in a sequence long enough
     to hold them (24 s), the force stays within 0.9–1.1 × mg in ≥ 94 % of the activity's frames
-    (before: 91–92 %: the repetitions were budgeted as if getting down and up took a fixed time)."""
+    (before: 90.7 and 91.9 %: the repetitions were budgeted as if getting down and up took a fixed time)."""
     ok = []
     for s in range(3):
         subj = Subject.random(100 + s, 100 + s)
