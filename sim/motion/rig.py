@@ -547,11 +547,15 @@ class Rig:
     def _rest_on_back(self, local: np.ndarray, contact: np.ndarray) -> None:
         """Where the back and the buttocks are both scheduled on the floor, pitch the root so
         that the back and the pelvis (sacrum, buttocks; not the backs of the thighs, which a
-        flexed hip lowers) are equally low, the pelvis _SACRUM_DROP lower (ramped in and out over a few frames)."""
-        wgt = near_contact_weight(contact[:, BACK] & contact[:, BUTT], 4)
-        f = np.flatnonzero(wgt > 0)
+        flexed hip lowers) are equally low, the pelvis _SACRUM_DROP lower. The frames around a
+        lying span take the nearest lying frame's correction, fading over _LIE_FADE frames (most
+        of a curl): refitted to a back already rising, or faded faster than the curl lifts the
+        trunk, it pitched the trunk back down toward the template's and up again."""
+        lying = contact[:, BACK] & contact[:, BUTT]
+        f = np.flatnonzero(lying)
         if len(f) == 0:
             return
+        total = Rotation.identity(len(f))
         for _ in range(4):
             g = self.fk(local[f])
             z = self.vertex_z(local[f], g)
@@ -561,9 +565,18 @@ class Rig:
             length = np.maximum(np.linalg.norm(d, axis=1), 0.05)
             axis = np.cross(np.array([0.0, 0.0, 1.0]), d / length[:, None])
             axis /= np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-9)
-            angle = np.arctan2(dz, length) * wgt[f]
-            rot = Rotation.from_rotvec(axis * angle[:, None]).as_matrix()
-            local[f, 0] = rot @ local[f, 0]
+            rot = Rotation.from_rotvec(axis * np.arctan2(dz, length)[:, None])
+            local[f, 0] = rot.as_matrix() @ local[f, 0]
+            total = rot * total
+        wgt = near_contact_weight(lying, _LIE_FADE)
+        ramp = np.flatnonzero((wgt > 0) & ~lying)
+        if len(ramp):
+            t_idx = np.arange(len(lying))
+            prev_l = np.maximum.accumulate(np.where(lying, t_idx, -len(lying)))
+            next_l = np.minimum.accumulate(np.where(lying, t_idx, 2 * len(lying))[::-1])[::-1]
+            nearest = np.where(ramp - prev_l[ramp] <= next_l[ramp] - ramp, prev_l[ramp], next_l[ramp])
+            rv = total.as_rotvec()[np.searchsorted(f, nearest)] * wgt[ramp, None]
+            local[ramp, 0] = Rotation.from_rotvec(rv).as_matrix() @ local[ramp, 0]
 
 
 _SMOOTH = 4  # frames over which transl corrections are spread
@@ -571,5 +584,6 @@ _MAX_SWING_S = 1.2  # a foot off the floor longer than this is not a walking ste
 _COM_ROUNDS = 3  # final passes that put the COM back on its balanced path after the reach and floor passes
 SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
 _UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
+_LIE_FADE = 12  # frames over which the lying correction fades out into a curl (and in before lying down)
 _SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis
 _SINK = 0.008  # m a locked foot/hand may press into the floor before the body is lifted
