@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim.motion.rig import BACK, BUTT, LF, LH, RF, RH, J, min_jerk
+from sim.motion.rig import BACK, BUTT, LF, LH, RF, RH, J
+from sim.motion.spans import min_jerk
 
 __all__ = ["Timeline", "pose", "BASE"]
 

@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from sim.motion.rig import BUTT, CONTACT_PARTS, SETTLE, UPRIGHT, euler_deg_to_matrix, min_jerk
+from sim.motion.rig import BUTT, CONTACT_PARTS, SETTLE, UPRIGHT, euler_deg_to_matrix
+from sim.motion.spans import min_jerk
 
 MIN_JERK_PEAK_ACC = 10.0 / math.sqrt(3.0)  # max |s''| of s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ on [0, 1]
 _TAU = np.linspace(0.0, 1.0, 17)  # where a key's height is followed

@@ -19,6 +19,15 @@ from edge.body.rotations import matrix_to_axis_angle as matrix_to_rotvec  # noqa
 from edge.body.rotations import skew
 from sim.contact.track import ACC_WINDOW
 from sim.motion.balance import foot_geometry, left_weight, support_point, zmp_com
+from sim.motion.spans import (
+    bridge_gaps,
+    envelope,
+    hold_at_span_start,
+    min_jerk,
+    near_contact_weight,
+    slerp_mats,
+    span_start_index,
+)
 from sim.motion.swing import swing_ankle_path, swing_spans
 
 J = {name: i for i, name in enumerate((
@@ -85,12 +94,6 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     k = skew(np.broadcast_to(axis, angle.shape + (3,)))
     s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
     return np.eye(3) + s * k + (1 - c) * (k @ k)
-
-
-def min_jerk(s: np.ndarray) -> np.ndarray:
-    """Minimum-jerk time warp of s in [0, 1] (zero velocity and acceleration at the ends)."""
-    s = np.clip(s, 0.0, 1.0)
-    return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
 
 
 # ----------------------------------------------------------------------------- the rig
@@ -240,16 +243,16 @@ class Rig:
         # blended from the last lock to the next one, so a foot never snaps on lift-off.
         foot_rot = {}
         for p in (LF, RF):
-            yaw = _hold_at_span_start(contact[:, p], foot_yaw[:, p])
-            yaw, hl = _bridge_gaps(contact[:, p], yaw), _bridge_gaps(contact[:, p], heel[:, p].copy())
+            yaw = hold_at_span_start(contact[:, p], foot_yaw[:, p])
+            yaw, hl = bridge_gaps(contact[:, p], yaw), bridge_gaps(contact[:, p], heel[:, p].copy())
             foot_rot[p] = rot_z(yaw) @ UPRIGHT @ rot_x(hl)
         toe_rot = {p: rot_x(-0.8 * np.maximum(heel[:, p], 0.0)) for p in (LF, RF)}
         wrist_rot = {}
         if hand_rot is not None:
             for p in (LH, RH):
                 if contact[:, p].any():
-                    wrist_rot[p] = hand_rot[_span_start_index(contact[:, p]), p - LH]
-        blend = {p: _near_contact_weight(contact[:, p], 4) for p in (LH, RH)}
+                    wrist_rot[p] = hand_rot[span_start_index(contact[:, p]), p - LH]
+        blend = {p: near_contact_weight(contact[:, p], 4) for p in (LH, RH)}
         feet_used = [p for p in (LF, RF) if contact[:, p].any()]
 
         def orient_ends(frames, g_rot):
@@ -265,7 +268,7 @@ class Rig:
                 f = frames[sel]
                 wrist = _CHAINS[p][2]
                 want = np.swapaxes(g_rot[sel, self.parents[wrist]], -1, -2) @ wrist_rot[p][f]
-                local[f, wrist] = _slerp_mats(local[f, wrist], want, blend[p][f])
+                local[f, wrist] = slerp_mats(local[f, wrist], want, blend[p][f])
 
         all_frames = np.arange(n)
         g = self.fk(local)
@@ -281,7 +284,7 @@ class Rig:
         # ---- 1. the anchor chain
         transl = np.zeros((n, 3))
         limbs = (LF, RF, LH, RH)
-        span_of = {q: _span_start_index(contact[:, q]) for q in limbs}
+        span_of = {q: span_start_index(contact[:, q]) for q in limbs}
         touch = {q: np.flatnonzero(contact[:, q] & ~np.r_[False, contact[:-1, q]]) for q in limbs}
 
         def floor_z(q, t0):
@@ -424,7 +427,7 @@ class Rig:
                 d = np.where(h < 0.98 * r, -v[:, 2] - np.sqrt(np.maximum(r * r - h * h, 0.0)), 0.0)  # lowering can't help a far lock
                 need[f] = np.maximum(need[f], d)
             if need.max() > 1e-5:
-                transl[:, 2] -= _envelope(np.maximum(need, 0.0), _SMOOTH)
+                transl[:, 2] -= envelope(np.maximum(need, 0.0), _SMOOTH)
             put_limbs(g_rot, g_t)
             g = self.fk(local)
             z = self.vertex_z(local, g) + transl[:, 2:3]
@@ -454,7 +457,7 @@ class Rig:
                 prev_r = np.maximum.accumulate(np.where(rest, t_idx, -1))
                 next_r = np.minimum.accumulate(np.where(rest, t_idx, n)[::-1])[::-1]
                 nearest = np.where((prev_r >= 0) & ((t_idx - prev_r <= next_r - t_idx) | (next_r >= n)), prev_r, next_r)
-                adj = adj[np.clip(nearest, 0, n - 1)] * _near_contact_weight(rest, _SMOOTH)
+                adj = adj[np.clip(nearest, 0, n - 1)] * near_contact_weight(rest, _SMOOTH)
                 moved_body = max(moved_body, float(np.abs(adj).max()))
                 transl[:, 2] -= adj
                 z -= adj[:, None]
@@ -504,7 +507,7 @@ class Rig:
         feet_only = feet.any(1) & ~contact[:, [LH, RH, BUTT, BACK]].any(1) & np.isin(anchor, (LF, RF)) & balance
         if not feet_only.any():
             return None
-        wgt = _near_contact_weight(feet_only, _SMOOTH + 1)
+        wgt = near_contact_weight(feet_only, _SMOOTH + 1)
         desired = None
         for _ in range(rounds):
             g_rot, g_t = self.fk(local)
@@ -527,7 +530,7 @@ class Rig:
         sit = (anchor == BUTT) & contact[:, BUTT] & ~contact[:, [BACK, LH, RH]].any(1) & seated
         if not sit.any():
             return
-        wgt = _near_contact_weight(sit, _SMOOTH + 1)
+        wgt = near_contact_weight(sit, _SMOOTH + 1)
         f = np.flatnonzero(wgt > 0)
         for _ in range(rounds):
             g_rot, g_t = self.fk(local[f])
@@ -544,11 +547,15 @@ class Rig:
     def _rest_on_back(self, local: np.ndarray, contact: np.ndarray) -> None:
         """Where the back and the buttocks are both scheduled on the floor, pitch the root so
         that the back and the pelvis (sacrum, buttocks; not the backs of the thighs, which a
-        flexed hip lowers) are equally low, the pelvis _SACRUM_DROP lower (ramped in and out over a few frames)."""
-        wgt = _near_contact_weight(contact[:, BACK] & contact[:, BUTT], 4)
-        f = np.flatnonzero(wgt > 0)
+        flexed hip lowers) are equally low, the pelvis _SACRUM_DROP lower. The frames around a
+        lying span take the nearest lying frame's correction, fading over _LIE_FADE frames (most
+        of a curl): refitted to a back already rising, or faded faster than the curl lifts the
+        trunk, it pitched the trunk back down toward the template's and up again."""
+        lying = contact[:, BACK] & contact[:, BUTT]
+        f = np.flatnonzero(lying)
         if len(f) == 0:
             return
+        total = Rotation.identity(len(f))
         for _ in range(4):
             g = self.fk(local[f])
             z = self.vertex_z(local[f], g)
@@ -558,9 +565,18 @@ class Rig:
             length = np.maximum(np.linalg.norm(d, axis=1), 0.05)
             axis = np.cross(np.array([0.0, 0.0, 1.0]), d / length[:, None])
             axis /= np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-9)
-            angle = np.arctan2(dz, length) * wgt[f]
-            rot = Rotation.from_rotvec(axis * angle[:, None]).as_matrix()
-            local[f, 0] = rot @ local[f, 0]
+            rot = Rotation.from_rotvec(axis * np.arctan2(dz, length)[:, None])
+            local[f, 0] = rot.as_matrix() @ local[f, 0]
+            total = rot * total
+        wgt = near_contact_weight(lying, _LIE_FADE)
+        ramp = np.flatnonzero((wgt > 0) & ~lying)
+        if len(ramp):
+            t_idx = np.arange(len(lying))
+            prev_l = np.maximum.accumulate(np.where(lying, t_idx, -len(lying)))
+            next_l = np.minimum.accumulate(np.where(lying, t_idx, 2 * len(lying))[::-1])[::-1]
+            nearest = np.where(ramp - prev_l[ramp] <= next_l[ramp] - ramp, prev_l[ramp], next_l[ramp])
+            rv = total.as_rotvec()[np.searchsorted(f, nearest)] * wgt[ramp, None]
+            local[ramp, 0] = Rotation.from_rotvec(rv).as_matrix() @ local[ramp, 0]
 
 
 _SMOOTH = 4  # frames over which transl corrections are spread
@@ -568,72 +584,6 @@ _MAX_SWING_S = 1.2  # a foot off the floor longer than this is not a walking ste
 _COM_ROUNDS = 3  # final passes that put the COM back on its balanced path after the reach and floor passes
 SIT_COM_FRAC = 0.08  # seated COM this far from the lowest point of the buttocks toward the feet (~84 % on the buttocks)
 _UPPER_LEVER_M = 0.17  # COM shift per radian of lower-spine flexion (upper-body mass share × its lever)
+_LIE_FADE = 12  # frames over which the lying correction fades out into a curl (and in before lying down)
 _SACRUM_DROP = 0.03  # m the pelvis lies lower than the back when supine: the sacrum and buttocks carry the heavy pelvis
 _SINK = 0.008  # m a locked foot/hand may press into the floor before the body is lifted
-
-
-def _envelope(x: np.ndarray, k: int) -> np.ndarray:
-    """A smooth curve ≥ x: a running max over ±k frames, then twice a running mean over ±k/2
-    (piecewise quadratic: no corners, so no spikes of acceleration)."""
-    from scipy.ndimage import maximum_filter1d, uniform_filter1d
-    h = max(k // 2, 1)
-    m = maximum_filter1d(x, 4 * h + 1, mode="nearest")
-    return uniform_filter1d(uniform_filter1d(m, 2 * h + 1, mode="nearest"), 2 * h + 1, mode="nearest")
-
-
-def _span_start_index(mask: np.ndarray) -> np.ndarray:
-    """For each frame, the first frame of the run of equal values it belongs to."""
-    n = len(mask)
-    change = np.r_[True, mask[1:] != mask[:-1]]
-    idx = np.where(change, np.arange(n), 0)
-    return np.maximum.accumulate(idx)
-
-
-def _hold_at_span_start(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """values frozen at the start of each contact span (free outside contact)."""
-    out = values.copy()
-    start = _span_start_index(mask)
-    out[mask] = values[start[mask]]
-    return out
-
-
-def _bridge_gaps(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Outside the mask, interpolate (min-jerk) between the last value before and the next after."""
-    out = values.astype(np.float64).copy()
-    n = len(mask)
-    idx = np.flatnonzero(mask)
-    if len(idx) == 0:
-        return out
-    gaps = np.flatnonzero(~mask)
-    if len(gaps) == 0:
-        return out
-    prev_i = np.maximum.accumulate(np.where(mask, np.arange(n), -1))
-    next_i = np.minimum.accumulate(np.where(mask, np.arange(n), n)[::-1])[::-1]
-    g = gaps
-    a, b = prev_i[g], next_i[g]
-    va = np.where(a >= 0, out[np.clip(a, 0, n - 1)], out[np.clip(b, 0, n - 1)])
-    vb = np.where(b < n, out[np.clip(b, 0, n - 1)], va)
-    s = np.where((a >= 0) & (b < n), (g - a) / np.maximum(b - a, 1), 0.0)
-    out[g] = va + (vb - va) * min_jerk(s)
-    return out
-
-
-def _near_contact_weight(mask: np.ndarray, k: int) -> np.ndarray:
-    """1 in contact, ramping to 0 over k frames before and after each contact span."""
-    n = len(mask)
-    idx = np.flatnonzero(mask)
-    if len(idx) == 0:
-        return np.zeros(n)
-    t = np.arange(n)
-    prev_i = np.maximum.accumulate(np.where(mask, t, -10**9))
-    next_i = np.minimum.accumulate(np.where(mask, t, 10**9)[::-1])[::-1]
-    dist = np.minimum(t - prev_i, next_i - t).astype(float)
-    return min_jerk(np.clip(1.0 - dist / (k + 1), 0.0, 1.0))
-
-
-def _slerp_mats(r0: np.ndarray, r1: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Rotation from r0 toward r1 by fraction w, (N,3,3) each."""
-    if len(r0) == 0:
-        return r0
-    rel = Rotation.from_matrix(np.swapaxes(r0, -1, -2) @ r1).as_rotvec() * w[:, None]
-    return r0 @ Rotation.from_rotvec(rel).as_matrix()

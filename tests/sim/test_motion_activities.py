@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, person_track, scene
@@ -161,3 +162,22 @@ def test_scene_people_apart_and_on_carpet(people, names, gap):
 def test_scene_refuses_impossible():
     with pytest.raises(ValueError):
         scene([Subject.random(i) for i in range(3)], ["push_up"], 3.0, RATE, (1.0, 1.0), rng=0, tries=6, model=MODEL)
+
+
+def test_sit_up_trunk_rises_and_lies_down_without_a_dip():
+    """Around a sit-up's lying span the root keeps the lying correction (Rig._rest_on_back) and
+    lets it fade over the curl: the trunk's elevation rises steadily as the back leaves the floor
+    and falls steadily as it lands. Before, the correction was refitted to the rising back and
+    faded in four frames: the trunk dipped back ~9° in one frame (a 1 cm pelvis jump)."""
+    back = CONTACT_PARTS.index("back")
+    for s in range(3):
+        tr = person_track(Subject.random(100 + s, 100 + s), ["sit_up"], 12.0, RATE, rng=np.random.default_rng((0, s)),
+                          model=MODEL)
+        elevation = np.degrees(np.arcsin(Rotation.from_rotvec(tr.pose_aa[:, :3]).as_matrix()[:, 2, 1]))
+        c = tr.contact[:, back]
+        leaves, lands = np.flatnonzero(c[:-1] & ~c[1:]), np.flatnonzero(~c[:-1] & c[1:])
+        assert len(leaves) and len(lands)
+        for e in leaves:
+            assert np.diff(elevation[e:e + 8]).min() > -1.0
+        for b in lands:
+            assert np.diff(elevation[max(b - 7, 0):b + 2]).max() < 1.0

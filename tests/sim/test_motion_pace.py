@@ -46,3 +46,19 @@ def test_a_brisk_subject_still_moves_under_control(name):
         own = tr.activity == ACTIVITIES.index(name)
         ok.append(np.abs(dyn.acc_m_s2[own, 2]) <= 0.1 * 9.81)
     assert np.concatenate(ok).mean() >= 0.95
+
+
+@pytest.mark.parametrize("name", ["push_up", "sit_up"])
+def test_floor_exercises_get_down_and_up_under_control_when_the_sequence_holds_them(name):
+    """Getting down to the floor, the repetitions and getting up are paced, and the
+    repetitions fill only what the paced getting down and up leave: in a sequence long enough
+    to hold them (24 s), the force stays within 0.9–1.1 × mg in ≥ 94 % of the activity's frames
+    (before: 90.7 and 91.9 %: the repetitions were budgeted as if getting down and up took a fixed time)."""
+    ok = []
+    for s in range(3):
+        subj = Subject.random(100 + s, 100 + s)
+        tr = person_track(subj, [name], 24.0, 14.0, rng=np.random.default_rng((0, s)), model=MODEL)
+        _, dyn = track_dynamics(MODEL, tr)
+        own = tr.activity == ACTIVITIES.index(name)
+        ok.append(np.abs(dyn.acc_m_s2[own, 2]) <= 0.1 * 9.81)
+    assert np.concatenate(ok).mean() >= 0.94
