@@ -19,10 +19,14 @@ while the board's status topic says online. Nothing but these few numbers leaves
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from edge.scene.falls import FallConfig, FallDetector
 from edge.topics import EVENTS_SCHEMA
+
+if TYPE_CHECKING:
+    from edge.runtime.stages import FrameOutcome
+    from edge.scene import SceneFrame
 
 
 def event_payload(device: str, event: dict, time_s: float) -> dict:
@@ -46,14 +50,14 @@ class EventStage:
     def active(self) -> dict[str, list[int]]:
         return self.detector.active
 
-    def frame(self, outcome: Any, scene_frame: Any, wall_time_s: float | None = None) -> list[dict]:
+    def frame(self, outcome: FrameOutcome | None, scene_frame: SceneFrame | None, wall_time_s: float | None = None) -> list[dict]:
         """This frame's event payloads. ``outcome``: the FrameOutcome (its record's people give the
         model's activity per track); ``scene_frame``: the SceneFrame the scene made of it (None: skipped)."""
         self._last_frame_mono = self.monotonic()
         if scene_frame is None or outcome is None or outcome.kind == "invalid":
             return []
         t0 = time.perf_counter()
-        record = getattr(outcome, "record", None) or {}
+        record = outcome.record or {}
         acts = {int(p["track_id"]): p.get("activity") for p in record.get("people", ())}
         self._last_t_s = float(scene_frame.t_s)
         events = self.detector.update(scene_frame, acts)

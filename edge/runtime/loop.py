@@ -15,7 +15,8 @@ Threads (docs/runtime.md):
 - publisher: :class:`~edge.runtime.publisher.Publisher`, the only thread touching sinks;
 - monitor: the status file every ``runtime.status_s``, the sinks' info every ``runtime.info_s``.
 
-Injectable for tests: ``source`` (a CarpetSource-like object, not started), ``sinks``,
+Injectable for tests: ``source`` (an :class:`~edge.sources.base.FrameSource`, not started; an object lacking one
+of its members is refused here with TypeError), ``sinks``,
 ``bundle``, ``calibration`` (a Calibration), ``clock`` (wall time for records' lag, status).
 """
 
@@ -39,6 +40,7 @@ from edge.runtime.publisher import Publisher
 from edge.runtime.sd_notify import Notifier
 from edge.runtime.stages import FrameOutcome, FrameStages
 from edge.runtime.status import SCHEMA, write_status
+from edge.sources.base import FrameSource, require_frame_source
 
 if TYPE_CHECKING:
     from calibration.file import Calibration
@@ -54,7 +56,7 @@ def _stderr(text: str) -> None:
 
 
 class Runtime:
-    def __init__(self, config: RuntimeConfig, *, source: Any = None, sinks: list | None = None,
+    def __init__(self, config: RuntimeConfig, *, source: FrameSource | None = None, sinks: list | None = None,
                  bundle: ModelBundle | None = None, calibration: Calibration | None = None,
                  clock: Callable[[], float] = time.time, say: Callable[[str], None] = _stderr) -> None:
         self.config = config
@@ -66,11 +68,11 @@ class Runtime:
         self.state = "new"
         self.error: str | None = None
         self.end_reason: str | None = None
-        self.source: Any = source
+        self.source: FrameSource | None = require_frame_source(source) if source is not None else None
         self.sinks: list | None = sinks
         self.bundle: ModelBundle | None = bundle
         self.chosen: ChosenCalibration | None = (
-            ChosenCalibration(calibration, Path(getattr(calibration, "path", "(given)")), False) if calibration is not None else None)
+            ChosenCalibration(calibration, Path("(given)"), False) if calibration is not None else None)
         self.stages: FrameStages | None = None
         self.events: EventStage | None = None  # when [events] enabled
         self.publisher: Publisher | None = None
@@ -120,6 +122,8 @@ class Runtime:
         from edge.sources import SourceError
 
         cfg = self.config
+        if self.source is not None:  # also one set after construction (tests): held to the same interface
+            self.source = require_frame_source(self.source)
         if self.bundle is None:
             path = cfg.bundle_path()
             try:
@@ -284,7 +288,7 @@ class Runtime:
         from calibration.runtime import status_temperature_c
 
         src, stages, pub, events = self.source, self.stages, self.publisher, self.events
-        assert stages is not None and pub is not None and self.board is not None  # made by setup() and start()
+        assert src is not None and stages is not None and pub is not None and self.board is not None  # setup(), start()
         assert self._started_mono is not None
         seconds = self.config.runtime.seconds
         deadline = self._started_mono + seconds if seconds > 0 else None
@@ -298,7 +302,7 @@ class Runtime:
                     self.board.frame(time.monotonic(), self._source_stats())
                     self._watch_board()
                     temperature = None
-                    if getattr(src, "last_status", None) is not last_status:
+                    if src.last_status is not last_status:
                         last_status = src.last_status
                         temperature = status_temperature_c(last_status)
                     try:
@@ -331,7 +335,7 @@ class Runtime:
                 if not got and events is not None:  # no frame: a lost board clears its events
                     for payload in events.idle():
                         pub.put_event(payload)
-                if not got and getattr(src, "ended", False):
+                if not got and src.ended:
                     self.end_reason = "the source ended"
                     break
         except Exception as exc:  # the source failed for good (e.g. a recording that cannot be read)
@@ -415,11 +419,9 @@ class Runtime:
 
     def queue_depths(self) -> dict[str, tuple[int, int] | None]:
         """Read-only, any thread: (depth now, bound) of the reader → pipeline frame queue ("frames") and of the
-        pipeline → publisher record queue ("records"); None where there is none (not set up, or an injected
-        source without a ``queue_depth()``)."""
-        depth = getattr(self.source, "queue_depth", None)
+        pipeline → publisher record queue ("records"); None where there is none (not set up)."""
         pub = self.publisher
-        return {"frames": depth() if depth is not None else None,
+        return {"frames": self.source.queue_depth() if self.source is not None else None,
                 "records": (pub.queued(), pub.bound) if pub is not None else None}
 
     def snapshot(self) -> dict[str, Any]:
@@ -429,7 +431,7 @@ class Runtime:
         now = self.clock()
         c = self.counters.snapshot()
         st = self._source_stats()
-        info = getattr(self.source, "info", None)
+        info = self.source.info if self.source is not None else None
         board = {}
         if info is not None:
             board = {"device_id": info.device_id, "rows": int(info.rows), "cols": int(info.cols),

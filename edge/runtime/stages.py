@@ -153,7 +153,7 @@ class FrameStages:
 
     def _advice(self, advice: list[Advice]) -> None:
         for a in advice:
-            text = getattr(a, "reason", str(a))
+            text = a.reason
             if text not in self._advice_said:
                 self._advice_said.add(text)
                 log.warning("calibration: %s", text)

@@ -21,7 +21,8 @@ import threading
 import time
 from abc import ABC, abstractmethod
 from collections import deque
-from typing import Any, Mapping, Sequence
+from contextlib import contextmanager
+from typing import Any, Iterator, Mapping, Sequence
 
 from edge.counters import Counters
 from edge.record import RecordError, check_record, check_telemetry, dumps
@@ -77,39 +78,28 @@ class Sink(ABC):
 
     def publish_bodies(self, record: Mapping) -> None:
         """Publish one ``cavatar.bodies/1`` record. RecordError (nothing published) if it is not one."""
-        try:
+        with self._counting_refusals():
             check_record(record)
             if record["device"] != self.device:
                 raise RecordError(f"record device {record['device']!r} is not this sink's device {self.device!r}")
             line = dumps(record)
-        except RecordError:
-            self.counters.add("refused")
-            raise
-        if self.closed:
-            raise SinkError(f"{self.scheme}:// sink is closed")
+        self._check_open()
         self._write_bodies(record, line, time.monotonic())
 
     def publish_info(self, info: Mapping) -> None:
         """Retained device information (model, versions, calibration age, counters). No arrays, no pressure."""
-        try:
+        with self._counting_refusals():
             check_telemetry(dict(info), "info")
-        except RecordError:
-            self.counters.add("refused")
-            raise
         self._write_info(dict(info))
 
     def publish_event(self, payload: Mapping) -> None:
         """One ``cavatar.events/1`` payload (a fall or person-down event raised or cleared); checked like info."""
-        try:
+        with self._counting_refusals():
             check_telemetry(dict(payload), "event")
             if payload.get("schema") != EVENTS_SCHEMA or payload.get("device") != self.device:
                 raise RecordError(f"not a cavatar.events/1 payload of device {self.device!r}")
             line = dumps(dict(payload))
-        except RecordError:
-            self.counters.add("refused")
-            raise
-        if self.closed:
-            raise SinkError(f"{self.scheme}:// sink is closed")
+        self._check_open()
         self._write_event(dict(payload), line)
 
     def publish_status(self, online: bool) -> None:
@@ -130,6 +120,19 @@ class Sink(ABC):
         return out
 
     # -- for subclasses -------------------------------------------------------------------
+
+    @contextmanager
+    def _counting_refusals(self) -> Iterator[None]:
+        """A RecordError raised inside (what a check refused) is counted as ``refused``, then raised on."""
+        try:
+            yield
+        except RecordError:
+            self.counters.add("refused")
+            raise
+
+    def _check_open(self) -> None:
+        if self.closed:
+            raise SinkError(f"{self.scheme}:// sink is closed")
 
     def _count_delivered(self, lag_s: float | None = None, n: int = 1) -> None:
         """``n`` records delivered; ``lag_s`` (publish call → delivered) joins the lag window when known."""

@@ -8,6 +8,20 @@ class SwappedBoard:
     """A source whose pinned board was replaced by another (what CarpetSource.stats() then says)."""
 
     info = None
+    last_status = None
+    ended = False
+
+    def start(self):
+        pass
+
+    def stop(self):
+        pass
+
+    def frames(self, timeout_s=None):
+        return iter(())
+
+    def queue_depth(self):
+        return 0, 4
 
     def stats(self):
         return {"source": {"board_mismatch": 1}, "board_mismatch": "another board answered: device_id 'carpet-B'"}
