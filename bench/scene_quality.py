@@ -22,7 +22,12 @@ the true person's pressure inside the track's mask; a pair needs ≥ 20 % of the
 - mask IoU over loaded sensels (true total > 0.2 kPa, the model's input floor): the track's mask
   against the sensels where the matched person's true pressure is the largest (the truth's
   assignment). With one person the model was trained on the whole frame, so the truth is every
-  loaded sensel.
+  loaded sensel;
+- trained mask IoU over the whole grid: the track's mask against the mask the model was trained
+  with (``export.data.footprint_masks``: the person's loaded sensels, nearest-joint assignment
+  between several, grown by 2 sensels), i.e. how closely the runtime's per-person input matches
+  the training input; with the share of the trained mask the track's covers, and of the track's
+  mask inside the trained one (which of the two is larger).
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from bench.machine import describe  # noqa: E402
 
 RATE_HZ = 14.0
 FLOOR_KPA = 0.2
+PITCH_M = 0.01905
 PRESENT_N = 20.0
 BIRTH_FRAMES = 3  # SceneConfig().birth_frames: everyone is on the carpet at a scene's first frame
 ALONE = ("stepping", "bending", "turning", "squat", "twisting", "raising_arms", "lunge", "sitting", "push_up", "sit_up",
@@ -75,21 +81,24 @@ def render_live(people: int, seconds: float, seed: int, cache: Path) -> dict[str
     path = cache / f"live-{people}p-{seconds:g}s-{seed}.npz"
     if path.exists():
         with np.load(path) as z:
-            return {k: z[k] for k in z.files}
+            if "joints_m" in z.files:  # a cache from before the joints were kept is made again
+                return {k: z[k] for k in z.files}
     from sim.live import LiveCarpet
 
     lc = LiveCarpet(96, 96, people, seed)
     n = int(round(seconds * RATE_HZ))
     own = np.zeros((n, people, 96, 96), np.float16)
     transl = np.zeros((n, people, 3), np.float32)
+    joints = np.zeros((n, people, 24, 3), np.float32)
     names = np.empty((n, people), dtype=object)
     for t in range(n):
         for j, (person, mass) in enumerate(zip(lc.truth(t), lc.mass_kg)):
             v = lc.body.forward(person["pose_aa"][None], person["betas"][None], person["transl_m"][None], vertices=True)
             res = lc.contact.pressure_kpa(v["vertices"][0], lc.body.faces, mass, static=True, tissue_kpa_per_mm=lc.tissue)
             own[t, j], transl[t, j], names[t, j] = res.pressure_kpa, person["transl_m"], person["activity"]
+            joints[t, j] = v["joints"][0]
     lc.close()
-    out = {"own_kpa": own, "transl_m": transl, "activity": names.astype(str)}
+    out = {"own_kpa": own, "transl_m": transl, "joints_m": joints, "activity": names.astype(str)}
     cache.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **out)
     return out
@@ -100,7 +109,8 @@ def render(activities: tuple[str, ...], seconds: float, seed: int, cache: Path) 
     path = cache / f"{'-'.join(activities)}-{seconds:g}s-{seed}.npz"
     if path.exists():
         with np.load(path) as z:
-            return {k: z[k] for k in z.files}
+            if "joints_m" in z.files:  # a cache from before the joints were kept is made again
+                return {k: z[k] for k in z.files}
     from edge.body import BodyModel
     from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
     from sim.dataset.generate import place_scene
@@ -115,6 +125,7 @@ def render(activities: tuple[str, ...], seconds: float, seed: int, cache: Path) 
     n = sc.num_frames
     own = np.zeros((n, len(subjects), 96, 96), np.float16)
     transl = np.zeros((n, len(subjects), 3), np.float32)
+    joints = np.zeros((n, len(subjects), 24, 3), np.float32)
     names = np.empty((n, len(subjects)), dtype=object)
     for t in range(n):
         for j, (tr, mass) in enumerate(zip(sc.tracks, masses)):
@@ -122,8 +133,9 @@ def render(activities: tuple[str, ...], seconds: float, seed: int, cache: Path) 
             res = contact.pressure_kpa(v["vertices"][0], body.faces, mass, static=True, tissue_kpa_per_mm=tissue)
             own[t, j] = res.pressure_kpa
             transl[t, j] = tr.transl_m[t]
+            joints[t, j] = v["joints"][0]
             names[t, j] = tr.activity_names[t]
-    out = {"own_kpa": own, "transl_m": transl, "activity": names.astype(str)}
+    out = {"own_kpa": own, "transl_m": transl, "joints_m": joints, "activity": names.astype(str)}
     cache.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **out)
     return out
@@ -151,12 +163,15 @@ def run_scene(data: dict[str, np.ndarray], sensor_seed: int, config=None) -> dic
         t0 = time.perf_counter()
         sf = st.update(cal.pressure_kpa, t_s, masks=cal.masked if cal.masked.any() else None)
         times.append((time.perf_counter() - t0) * 1e3)
-        rows.append({**score_frame(own[t], sf.people, data["activity"][t], last_match), "frame": t})
+        rows.append({**score_frame(own[t], sf.people, data["activity"][t], last_match, data["joints_m"][t]), "frame": t})
     return {"rows": rows, "times_ms": times}
 
 
-def score_frame(own: np.ndarray, people: list, activity: np.ndarray, last_match: dict[int, int]) -> dict:
-    """own (P, H, W) true kPa per person; people: the scene's PersonObservations."""
+def score_frame(own: np.ndarray, people: list, activity: np.ndarray, last_match: dict[int, int],
+                joints_m: np.ndarray) -> dict:
+    """own (P, H, W) true kPa per person; people: the scene's PersonObservations; joints_m (P, 24, 3)."""
+    from export.data import footprint_masks
+
     total = own.sum(axis=0)
     loaded = total > FLOOR_KPA
     force = own.reshape(len(own), -1).sum(axis=1)
@@ -167,7 +182,10 @@ def score_frame(own: np.ndarray, people: list, activity: np.ndarray, last_match:
     if people and present:
         r, c = linear_sum_assignment(-share)
         matched = {present[j]: i for i, j in zip(r, c) if share[i, j] >= 0.2}
-    switches, ious = 0, []
+    switches, ious, trained = 0, [], []
+    is_present = np.zeros(len(own), bool)
+    is_present[present] = True
+    footprints = footprint_masks(total, joints_m, is_present, PITCH_M, FLOOR_KPA)  # what the model was trained on
     for p, i in matched.items():
         tid = people[i].track_id
         switches += p in last_match and last_match[p] != tid
@@ -175,8 +193,11 @@ def score_frame(own: np.ndarray, people: list, activity: np.ndarray, last_match:
         truth = loaded if len(present) == 1 else loaded & (owner == p)
         got = loaded & people[i].mask
         ious.append(float((truth & got).sum() / max((truth | got).sum(), 1)))
+        both = float((footprints[p] & people[i].mask).sum())
+        trained.append((both / max(float((footprints[p] | people[i].mask).sum()), 1.0),
+                        both / max(float(footprints[p].sum()), 1.0), both / max(float(people[i].mask.sum()), 1.0)))
     return {"true": len(present), "reported": len(people), "missed": len(present) - len(matched),
-            "extra": len(people) - len(matched), "switches": int(switches), "ious": ious,
+            "extra": len(people) - len(matched), "switches": int(switches), "ious": ious, "trained_ious": trained,
             "activity": str(activity[present[0]]) if len(present) == 1 else "several"}
 
 
@@ -184,6 +205,7 @@ def summarise(rows: list[dict]) -> dict:
     n = len(rows)
     pf = sum(r["true"] for r in rows)
     ious = [x for r in rows for x in r["ious"]]
+    trained = [tuple(x) for r in rows for x in r["trained_ious"]]
     missed, extra, sw = (sum(r[k] for r in rows) for k in ("missed", "extra", "switches"))
     settled = [r for r in rows if r["frame"] >= BIRTH_FRAMES - 1]
     return {"frames": n, "person_frames": pf, "count_right": round(sum(r["true"] == r["reported"] for r in rows) / max(n, 1), 4),
@@ -191,7 +213,19 @@ def summarise(rows: list[dict]) -> dict:
             "missed": missed, "extra": extra, "id_switches": sw, "mota": round(1 - (missed + extra + sw) / max(pf, 1), 4),
             "count_right_after_birth": round(sum(r["true"] == r["reported"] for r in settled) / max(len(settled), 1), 4),
             "mask_iou_mean": round(float(np.mean(ious)), 4) if ious else None,
-            "mask_iou_p10": round(float(np.percentile(ious, 10)), 4) if ious else None}
+            "mask_iou_p10": round(float(np.percentile(ious, 10)), 4) if ious else None,
+            **_trained(trained)}
+
+
+def _trained(trained: list[tuple[float, float, float]]) -> dict:
+    """Means of (IoU, share of the trained mask inside the track's, share of the track's inside the trained) and the IoU's p10."""
+    if not trained:
+        return {"trained_mask_iou_mean": None, "trained_mask_iou_p10": None, "trained_mask_covered_mean": None,
+                "track_mask_inside_trained_mean": None}
+    t = np.array(trained)
+    return {"trained_mask_iou_mean": round(float(t[:, 0].mean()), 4), "trained_mask_iou_p10": round(float(np.percentile(t[:, 0], 10)), 4),
+            "trained_mask_covered_mean": round(float(t[:, 1].mean()), 4),
+            "track_mask_inside_trained_mean": round(float(t[:, 2].mean()), 4)}
 
 
 def main(argv: list[str] | None = None) -> int:

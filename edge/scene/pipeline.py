@@ -25,8 +25,14 @@ from edge.scene.contacts import detect_contacts, sensel_centres_m
 from edge.scene.filters import FilterChain
 from edge.scene.handover import PeopleHandover, PersonObservation
 from edge.scene.people import group_blobs, prior_keys
-from edge.scene.tracking import Observation, PeopleTracker
+from edge.scene.tracking import Observation, PeopleTracker, Track
 from edge.scene.validate import REASONS, check_frame
+
+# A group whose contacts carry less than this fraction of min_person_force_n in the frame before the EMA
+# (the temporal median only) is the filters' memory of someone who left at once (sim:// starting a new
+# scene; someone stepping off): it is no observation, and its track coasts instead of being reported on an
+# empty input. A body standing, sitting or lying always carries far more; one in the air coasts anyway.
+GHOST_FRACTION = 0.25
 
 
 @dataclass(frozen=True, slots=True)
@@ -188,7 +194,12 @@ class SceneTracker:
                 cop = (centres[idx] * f[:, None]).sum(axis=0) / max(f.sum(), 1e-12)
             obs.append(Observation(cop_m=cop, force_n=total * sensel_m2 * 1e3))
             masks.append(mask)
-        tracks = self.people.step(obs, [k for _, k in groups], t_s)
+        # a group the pressure has left (only the filters' memory shows it) is no observation: its track coasts
+        live = [g for g, o in enumerate(obs) if o.force_n >= GHOST_FRACTION * cfg.min_person_force_n]
+        stepped = self.people.step([obs[g] for g in live], [groups[g][1] for g in live], t_s)
+        tracks: list[Track | None] = [None] * len(groups)
+        for g, tr in zip(live, stepped):
+            tracks[g] = tr
         for (idx, key), tr, o in zip(groups, tracks, obs):
             if tr is not None:
                 extent = float(np.max(np.linalg.norm(centres[idx] - o.cop_m, axis=1)))

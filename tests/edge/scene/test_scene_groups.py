@@ -162,3 +162,17 @@ def test_new_feet_landing_on_old_footprints_do_not_hide_that_everyone_moved():
     assert not moved_at_once(forces, priors, bodies)  # 500 N of 900 N kept by the keys alone
     assert moved_at_once(forces, priors, bodies, stayed=0.35)
     assert not moved_at_once(forces, priors, bodies, stayed=0.9)  # the pressure stayed: people stepping
+
+
+def test_a_person_gone_at_once_is_not_reported_on_the_filters_memory():
+    """sim:// starts a new scene by moving people at once: the pressure under the old place is gone from one
+    frame to the next, and only the filters' memory still shows contacts there. Reporting the old track on
+    them hands the model an empty input (it then puts the body mid-carpet) and the score sees a stray
+    record near the person who just appeared; the track coasts instead and the newcomer is reported alone."""
+    a, b = (0.45, 0.5), (1.4, 1.35)  # 1.3 m apart: beyond the track's gate
+    frames = [(stance(*a, 70 * G), {1: a}) for _ in range(20)] + [(stance(*b, 70 * G), {2: b}) for _ in range(15)]
+    log, _, st = run(frames)
+    assert all(len(p) == 1 for p in log[3:20])
+    stray = [i for i, p in enumerate(log[20:], 20) for c in p.values() if np.hypot(c[0] - a[0], c[1] - a[1]) < 0.3]
+    assert not stray, stray
+    assert all(len(p) == 1 for p in log[23:]), [len(p) for p in log[20:]]
