@@ -51,6 +51,13 @@ SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
 STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
 STANDING_APART_S = 1.0  # two tracks that have each stood on their feet this long are two people, never one body
 LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames (a body re-segmented for a frame)
+# A supported descent is no fall (a push-up from a crouch, lying back from sitting on the floor): from the last reading
+# on the feet to the first on the floor the centre of pressure slid at most SUPPORTED_JUMP_M (a falling body's trunk
+# lands ≥ 0.24 m from its feet on the tuning falls; push-ups and sit-ups 0.00–0.15 m) while that reading still carried
+# at least SUPPORTED_LOAD of the load then lying (a falling body unloads its feet first: ≤ 0.49 on the tuning falls;
+# push-ups ≈ 1, the sit-ups that alarmed 0.64–0.92).
+SUPPORTED_JUMP_M = 0.15
+SUPPORTED_LOAD = 0.55
 
 
 def _f(default, doc: str):
@@ -228,6 +235,7 @@ class _Episode:
     down: bool = False
     fall_conf: float = 0.0
     judged: bool = False
+    touch_m: np.ndarray | None = None  # the centre of its first frame on the floor
     landed_length_m: float = np.inf  # the shortest the body was from landing until judged (median-filtered)
     lengths: deque = field(default_factory=lambda: deque(maxlen=LANDED_FRAMES))  # its latest lengths
 
@@ -296,7 +304,7 @@ class FallDetector:
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
             if ep is None:
-                ep = _Episode(t_s, t_s, b.centre_m, None, set(b.track_ids), area_m2=b.area_m2)
+                ep = _Episode(t_s, t_s, b.centre_m, None, set(b.track_ids), area_m2=b.area_m2, touch_m=b.centre_m)
                 self._episodes.append(ep)
             moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
                       or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
@@ -385,6 +393,18 @@ class FallDetector:
             # lighter than the body now lying and not seated: the body in the air, a hand: look further back
         return None
 
+    def _supported(self, start_t: float, touch_m: np.ndarray, b: BodyFeatures) -> bool:
+        """A descent under control (a push-up from a crouch, lying back from sitting): the last reading on the feet
+        came just before the first touch (within RUN_GAP_S), the centre of pressure slid from it to where the body
+        first touched (at most SUPPORTED_JUMP_M) and it still carried at least SUPPORTED_LOAD of the load ``b`` now
+        lying. A falling body unloads its feet and lands its trunk away from them."""
+        c = self.config
+        last = next((r for r in reversed(self._feet)
+                     if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m), None)
+        if last is None or start_t - last[0] > RUN_GAP_S:
+            return False
+        return float(np.linalg.norm(touch_m - last[1])) <= SUPPORTED_JUMP_M and last[2] >= SUPPORTED_LOAD * b.force_n
+
     def _collapsed(self, start_t: float, end_t: float, run: list, landed_length_m: float, b: BodyFeatures) -> bool:
         """Someone who crumpled where they stood (knees giving way, then over to the side): the stance ``run``
         (newest first) ended at most collapse_window_s before the landing at start_t and carried a standing
@@ -425,7 +445,8 @@ class FallDetector:
         tid = min(ep.track_ids)
         if not ep.judged and held >= c.confirm_s:  # judged once landed: from where the body now lies
             ep.judged = True
-            ep.arrival_s = self._arrival(ep.start_t, b, ep.landed_length_m)
+            supported = ep.touch_m is not None and self._supported(ep.start_t, ep.touch_m, b)
+            ep.arrival_s = None if supported else self._arrival(ep.start_t, b, ep.landed_length_m)
         if not ep.fall and ep.arrival_s is not None and ep.arrival_s <= c.fall_window_s and held >= c.confirm_s:
             ep.fall = True
             ep.fall_conf = round(float(np.clip(1.0 - 0.5 * ep.arrival_s / max(c.fall_window_s, 1e-6), 0.5, 1.0)), 3)
