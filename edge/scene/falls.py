@@ -58,6 +58,16 @@ LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames 
 # push-ups ≈ 1, the sit-ups that alarmed 0.64–0.92).
 SUPPORTED_JUMP_M = 0.15
 SUPPORTED_LOAD = 0.55
+# A body at full length (floor_long_m, feet to shoulders) that lies dead still is on the floor however sparse its
+# print reads (on the board's path a lying body can read 0.02–0.04 m² at 12–15 kPa, like a lunge's two feet): still
+# means its centre within LONG_STILL_M and its area within LONG_STILL_AREA of where it lay LONG_STILL_S ago; a lunge
+# or a push-up's plank moves sooner (≤ 0.5 s on the tuning seeds) — and it came down unloaded: some reading on the
+# feet within fall_window_s before it lay still carried less than SUPPORTED_LOAD of its load (the body was in the air;
+# a lunge's feet carry the weight throughout). It lay there since it first lay still.
+LONG_STILL_S = 1.0
+LONG_STILL_M = 0.03
+LONG_STILL_AREA = 0.1
+LONG_STILL_MIN_AREA_M2 = 0.015
 
 
 def _f(default, doc: str):
@@ -236,6 +246,7 @@ class _Episode:
     fall_conf: float = 0.0
     judged: bool = False
     touch_m: np.ndarray | None = None  # the centre of its first frame on the floor
+    sparse: bool = False  # came onto the floor as a long print lying still (it stays while it is that long)
     landed_length_m: float = np.inf  # the shortest the body was from landing until judged (median-filtered)
     lengths: deque = field(default_factory=lambda: deque(maxlen=LANDED_FRAMES))  # its latest lengths
 
@@ -250,6 +261,7 @@ class FallDetector:
         self._episodes: list[_Episode] = []
         self._standing_since: dict[int, float] = {}
         self._born: dict[int, float] = {}  # when each present track first appeared
+        self._still: list[list] = []  # [since t_s, centre (2,), area m², last seen t_s] of long prints lying still
         self._now = 0.0  # the time of the frame being stepped
         self.raised = {"fall": 0, "person_down": 0}
 
@@ -289,12 +301,15 @@ class FallDetector:
         self._now = t_s
         while self._feet and self._feet[0][0] < t_s - c.down_window_s:
             self._feet.popleft()
+        self._still = [s for s in self._still if t_s - s[3] <= RUN_GAP_S]
         seen: set[int] = set()
         for b in bodies:
             person = b.force_n >= c.person_min_force_n  # lighter: a pet, a bag, a hand on the carpet
-            floor = person and self._lying(b)
+            since = self._still_since(t_s, b) if person else None
+            floor = person and (self._lying(b) or since is not None)
             ep = self._episode_near(b) if person else None
-            if ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2:
+            if (ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2
+                    and not (ep.sparse and self._long(b))):
                 ep = None  # up again (or never down): the episode ends after release_s
             if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
                                and b.length_m <= c.feet_max_length_m):
@@ -304,7 +319,9 @@ class FallDetector:
             if ep is None and not floor:
                 continue  # sitting, kneeling, a plank
             if ep is None:
-                ep = _Episode(t_s, t_s, b.centre_m, None, set(b.track_ids), area_m2=b.area_m2, touch_m=b.centre_m)
+                sparse = since is not None and not self._lying(b)
+                ep = _Episode(since if since is not None and sparse else t_s, t_s, b.centre_m, None, set(b.track_ids),  # lying still since
+                              area_m2=b.area_m2, touch_m=b.centre_m, sparse=sparse)
                 self._episodes.append(ep)
             moving = (float(np.linalg.norm(b.centre_m - ep.centre_m)) > EXERCISE_MOVE_M
                       or abs(b.area_m2 - ep.area_m2) > EXERCISE_AREA_FRACTION * max(ep.area_m2, 1e-6))
@@ -333,7 +350,7 @@ class FallDetector:
         events = []
         for ep in self._episodes:
             events += self._clear(ep, t_s, reason)
-        self._episodes, self._feet, self._standing_since, self._born = [], deque(), {}, {}
+        self._episodes, self._feet, self._standing_since, self._born, self._still = [], deque(), {}, {}, []
         return events
 
     @property
@@ -391,6 +408,27 @@ class FallDetector:
             if self._collapsed(start_t, end_t, run, landed, b):  # stood, then went down through a light kneel
                 return start_t - end_t
             # lighter than the body now lying and not seated: the body in the air, a hand: look further back
+        return None
+
+    def _long(self, b: BodyFeatures) -> bool:
+        """At full length (feet to shoulders), however sparse: a body that came down so stays on the floor."""
+        return b.length_m >= self.config.floor_long_m and b.area_m2 >= LONG_STILL_MIN_AREA_M2
+
+    def _still_since(self, t_s: float, b: BodyFeatures) -> float | None:
+        """When a long print (at least floor_long_m and LONG_STILL_MIN_AREA_M2) began to lie still where ``b`` lies,
+        if that was LONG_STILL_S ago or more and it came down unloaded (see LONG_STILL_S); None otherwise."""
+        if not self._long(b):
+            return None
+        for s in self._still:
+            if (float(np.linalg.norm(b.centre_m - s[1])) <= LONG_STILL_M
+                    and abs(b.area_m2 - s[2]) <= LONG_STILL_AREA * s[2]):
+                s[3] = t_s
+                if t_s - s[0] < LONG_STILL_S:
+                    return None
+                before = [r[2] for r in self._feet if s[0] - self.config.fall_window_s <= r[0] < s[0]
+                          and np.linalg.norm(r[1] - b.centre_m) <= self.config.fall_radius_m]
+                return s[0] if before and min(before) < SUPPORTED_LOAD * b.force_n else None
+        self._still.append([t_s, b.centre_m, b.area_m2, t_s])
         return None
 
     def _supported(self, start_t: float, touch_m: np.ndarray, b: BodyFeatures) -> bool:

@@ -393,3 +393,27 @@ def test_a_fall_whose_feet_carry_the_load_to_the_last_frame_is_still_a_fall():
     a = np.array([0.9, 0.4])
     ev, _ = run([(3.0, [body([1], a, **FEET)]), (34.0, [body([2], a + (0, 0.5), **LYING)])])
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_body_lying_dead_still_on_a_sparse_print_is_on_the_floor():
+    """On the board's path a lying body can read like a lunge: 2.0 m long on 0.022 m² at 13.6 kPa. The feet
+    unloaded as it fell (a reading at 150 N of the 300 N now lying), and it lies dead still: a fall, then
+    person_down; the person_down stays raised while the print stays that long, even when it shifts a little."""
+    a = np.array([0.9, 0.4])
+    sparse = dict(force_n=300.0, area_m2=0.022, length_m=2.0)
+    script = [(3.0, [body([1], a, force_n=300.0, area_m2=0.025, length_m=0.6)]),
+              (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)]),
+              (20.0, [body([1, 2], a + (0.1, 0.6), **sparse)]), (15.0, [body([1, 2], a + (0.1, 0.66), **sparse)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < ev[0][2] - 3.4 <= 1.5 and 29.9 <= ev[1][2] - 3.4 <= 32.0
+
+
+def test_a_long_hard_print_that_keeps_moving_is_not_lying():
+    """The same long, hard print that shifts every half second (a lunge, a plank's reps) never lies still."""
+    a = np.array([0.9, 0.4])
+    sparse = dict(force_n=300.0, area_m2=0.022, length_m=2.0)
+    script = [(3.0, [body([1], a, force_n=300.0, area_m2=0.025, length_m=0.6)]),
+              (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)])]
+    script += [(0.5, [body([1], a + (0.1, 0.6 + 0.05 * (k % 2)), **sparse)]) for k in range(60)]
+    assert run(script)[0] == []
