@@ -358,3 +358,62 @@ def test_body_features_merge_near_tracks_and_measure_the_load():
     assert 1.4 < one[0].length_m < 1.8  # 4σ of two equal patches 0.8 m apart ≈ 1.6 m
     two = body_features(people, p, pitch, merge_radius_m=0.5)
     assert len(two) == 2 and all(b.length_m < 0.4 for b in two)
+
+
+def test_lying_back_from_sitting_on_the_floor_is_no_fall():
+    """A sit-up's start, squeezed: stand, sit down on the floor (a buttocks-and-feet print that reads like feet,
+    carrying 400 N), lie back. The centre of pressure slides onto the floor (0.05 m a frame) while the seat still
+    carries most of the weight; the body comes to rest 0.5 m from where they stood — far enough for a fall, but
+    nothing was in the air."""
+    a = np.array([0.9, 0.4])
+    seat = dict(force_n=400.0, area_m2=0.033, length_m=0.65)
+    script = [(2.0, [body([1], a, **FEET)]), (0.6, [body([1], a + (0, 0.1), **seat)])]
+    script += [(1 / RATE, [body([1], a + (0, 0.1 + 0.05 * k), **seat)]) for k in range(1, 4)]
+    script += [(1 / RATE, [body([1], a + (0, 0.25 + 0.05 * k), force_n=550.0, area_m2=0.06 + 0.01 * k, length_m=0.8)])
+               for k in range(1, 6)]
+    ev, _ = run(script + [(10.0, [body([1], a + (0, 0.55), force_n=550.0, area_m2=0.1, length_m=1.15)])])
+    assert ev == []
+
+
+def test_a_push_up_from_a_crouch_straight_into_a_long_plank_is_no_fall():
+    """Down onto hands and feet (a crouch that reads like feet, carrying the whole load), then the feet hop back:
+    the plank is 1.65 m long from its first frame on the floor, in place — a collapse's print — but the hands
+    carried the body all the way and the centre of pressure slid 0.05 m."""
+    a = np.array([0.9, 0.6])
+    crouch = dict(force_n=640.0, area_m2=0.045, length_m=0.8)
+    plank = dict(force_n=650.0, area_m2=0.052, length_m=1.65)
+    script = [(3.0, [body([1], a, **FEET)]), (1.0, [body([1], a + (0, 0.1), **crouch)]),
+              (1 / RATE, [body([1], a + (0, 0.15), **plank)]), (20.0, [body([1], a + (0, 0.3), **plank)])]
+    ev, _ = run(script)
+    assert ev == []
+
+
+def test_a_fall_whose_feet_carry_the_load_to_the_last_frame_is_still_a_fall():
+    """The supported-descent rule needs both: here the load never drops, but the trunk lands 0.5 m from the feet."""
+    a = np.array([0.9, 0.4])
+    ev, _ = run([(3.0, [body([1], a, **FEET)]), (34.0, [body([2], a + (0, 0.5), **LYING)])])
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_body_lying_dead_still_on_a_sparse_print_is_on_the_floor():
+    """On the board's path a lying body can read like a lunge: 2.0 m long on 0.022 m² at 13.6 kPa. The feet
+    unloaded as it fell (a reading at 150 N of the 300 N now lying), and it lies dead still: a fall, then
+    person_down; the person_down stays raised while the print stays that long, even when it shifts a little."""
+    a = np.array([0.9, 0.4])
+    sparse = dict(force_n=300.0, area_m2=0.022, length_m=2.0)
+    script = [(3.0, [body([1], a, force_n=300.0, area_m2=0.025, length_m=0.6)]),
+              (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)]),
+              (20.0, [body([1, 2], a + (0.1, 0.6), **sparse)]), (15.0, [body([1, 2], a + (0.1, 0.66), **sparse)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < ev[0][2] - 3.4 <= 1.5 and 29.9 <= ev[1][2] - 3.4 <= 32.0
+
+
+def test_a_long_hard_print_that_keeps_moving_is_not_lying():
+    """The same long, hard print that shifts every half second (a lunge, a plank's reps) never lies still."""
+    a = np.array([0.9, 0.4])
+    sparse = dict(force_n=300.0, area_m2=0.022, length_m=2.0)
+    script = [(3.0, [body([1], a, force_n=300.0, area_m2=0.025, length_m=0.6)]),
+              (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)])]
+    script += [(0.5, [body([1], a + (0.1, 0.6 + 0.05 * (k % 2)), **sparse)]) for k in range(60)]
+    assert run(script)[0] == []
