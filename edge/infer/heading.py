@@ -60,6 +60,9 @@ class HeadingParams:
                                      # (the feet say where an upright body faces, not a lying one)
     confirm_flip_frames: float = 0.0  # without evidence, a 180° jump of the model is published only after
                                      # it has lasted this many frames (0: at once)
+    follow_axis_deg: float = 0.0     # > 0: the evidence turns with the feet's long axis between frames when
+                                     # that changes by at most this much (a person turning carries it along;
+                                     # a larger jump is a foot landing askew); 0: it only decays toward new votes
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "HeadingParams":
@@ -105,16 +108,26 @@ def load(path: str | Path | None = None, activities: list[str] | None = None) ->
         raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
 
 
+MIN_AXIS_AGREEMENT = 0.5  # the feet's axes must agree this well (mean resultant of the doubled angles)
+
+
 def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, float]:
     """(H,W) one person's kPa → (K,2) unit forward vectors (x, y) of the K foot-like blobs whose heel
-    offset is clear and plausible, and the share of the person's force all foot-like blobs carry.
+    offset is clear and plausible, and the share of the person's force all foot-like blobs carry."""
+    votes, share, _ = feet(pressure_kpa, pitch_m, params)
+    return votes, share
+
+
+def feet(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, float, float]:
+    """:func:`foot_votes` and the feet's long axis (radians, modulo π, in the votes' (x, y); NaN when no
+    foot-like blob carries force or their axes disagree): the force-weighted mean of the doubled angles.
 
     The blobs' moments come from one labelling of the loaded box and one reduceat (no loop over blobs)."""
     p = np.asarray(pressure_kpa)
     loaded = p > params.floor_kpa
     rows, cols = np.flatnonzero(loaded.any(1)), np.flatnonzero(loaded.any(0))
     if not len(rows):
-        return np.zeros((0, 2)), 0.0
+        return np.zeros((0, 2)), 0.0, float("nan")
     box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
     labels, n = ndimage.label(loaded[box])
     rr, cc = np.nonzero(labels)
@@ -139,29 +152,47 @@ def foot_votes(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) 
     phi = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the major axis
     axis = np.stack([np.cos(phi), np.sin(phi)], -1)
     cop = np.stack([swx, swy], -1) / force[:, None]
+    feet_axis = _mean_axis_rad(phi[foot], force[foot])
     if params.outline:  # the wide forefoot holds most sensels, the narrow heel trails: skewness < 0 toward the toes
         t = (x - mx[lab - 1]) * axis[lab - 1, 0] + (y - my[lab - 1]) * axis[lab - 1, 1]
         m2 = np.bincount(lab, weights=t * t, minlength=n + 1)[1:] / count
         m3 = np.bincount(lab, weights=t ** 3, minlength=n + 1)[1:] / count
         skew = m3 / np.maximum(m2, 1e-12) ** 1.5
         vote = foot & (np.abs(skew) >= params.min_skew)
-        return -np.sign(skew[vote])[:, None] * axis[vote], share
+        return -np.sign(skew[vote])[:, None] * axis[vote], share, feet_axis
     offset_mm = ((np.stack([mx, my], -1) - cop) * axis).sum(-1) * pitch_m * 1e3  # > 0: the toes lie along +axis
     vote = foot & (np.abs(offset_mm) >= params.min_offset_mm) & (np.abs(offset_mm) <= params.max_offset_mm)
     if params.max_plateau_share < 1.0:  # a saturated blob's CoP says nothing of its heel
         peak = ndimage.maximum(p[box], labels, np.arange(1, n + 1))
         at_peak = np.bincount(lab, weights=w >= 0.98 * peak[lab - 1], minlength=n + 1)[1:]
         vote &= at_peak <= params.max_plateau_share * count
-    return np.sign(offset_mm[vote])[:, None] * axis[vote], share
+    return np.sign(offset_mm[vote])[:, None] * axis[vote], share, feet_axis
+
+
+def _mean_axis_rad(phi: np.ndarray, weight: np.ndarray) -> float:
+    """Axes (radians, modulo π) → their weighted mean axis, NaN when none or they disagree."""
+    total = float(weight.sum())
+    if not len(phi) or total <= 0:
+        return float("nan")
+    c, s = float((weight * np.cos(2 * phi)).sum()), float((weight * np.sin(2 * phi)).sum())
+    if np.hypot(c, s) < MIN_AXIS_AGREEMENT * total:
+        return float("nan")
+    return 0.5 * float(np.arctan2(s, c))
 
 
 def frame_cue(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, bool]:
     """(H,W) → ((2,) the frame's forward evidence, whether the person stands on their feet): the feet's
     votes summed (two feet that disagree cancel); none when anything but feet carries much of the
     weight (hands, seat, knees: then the person is not on their feet)."""
-    v, share = foot_votes(pressure_kpa, pitch_m, params)
+    cue, on_feet, _ = frame_evidence(pressure_kpa, pitch_m, params)
+    return cue, on_feet
+
+
+def frame_evidence(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, bool, float]:
+    """:func:`frame_cue` and the feet's long axis (radians modulo π, NaN when off the feet or unclear)."""
+    v, share, axis_rad = feet(pressure_kpa, pitch_m, params)
     on_feet = share >= params.min_foot_share
-    return (v.sum(0) if len(v) and on_feet else np.zeros(2)), bool(on_feet)
+    return (v.sum(0) if len(v) and on_feet else np.zeros(2)), bool(on_feet), (axis_rad if on_feet else float("nan"))
 
 
 def _quaternion(orient_aa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -234,21 +265,25 @@ class HeadingResolver:
         self.last_yaw: float | None = None
         self.flips = 0  # frames published turned
         self.pending = 0  # frames the model has stood a half turn from the published yaw (confirm_flip_frames)
+        self.last_axis_rad = float("nan")  # the feet's axis when last seen (follow_axis)
 
     def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
                 activity_probs: np.ndarray | None = None) -> np.ndarray:
         """(72,) the model's pose, (H,W) the person's kPa (as the model saw it), (A,) the model's
         activity probabilities → (72,) the pose to publish."""
-        cue, on_feet = frame_cue(person_kpa, pitch_m, self.params)
-        return self.decide(pose_aa, cue, activity_probs, on_feet)
+        cue, on_feet, axis_rad = frame_evidence(person_kpa, pitch_m, self.params)
+        return self.decide(pose_aa, cue, activity_probs, on_feet, axis_rad)
 
     def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None,
-               on_feet: bool = True) -> np.ndarray:
-        """:meth:`resolve` with the frame's cue (2,) and whether the person is on their feet already computed."""
+               on_feet: bool = True, axis_rad: float = float("nan")) -> np.ndarray:
+        """:meth:`resolve` with the frame's cue (2,), whether the person is on their feet and the feet's
+        axis already computed."""
         p = self.params
         weight = 1.0
         if self.activity_weight is not None and activity_probs is not None:
             weight = float(np.asarray(activity_probs, np.float64) @ self.activity_weight)
+        if p.follow_axis_deg > 0:
+            self._follow_axis(axis_rad, np.radians(p.follow_axis_deg))
         e = self.evidence * (p.decay if on_feet else p.off_feet_decay) + weight * np.asarray(cue, np.float64)
         length = float(np.hypot(e[0], e[1]))
         if length > p.max_evidence:
@@ -264,6 +299,20 @@ class HeadingResolver:
             self.flips += 1
         self.last_yaw = yaw
         return out
+
+    def _follow_axis(self, axis_rad: float, max_step_rad: float) -> None:
+        """Turn the evidence by the feet's axis change since they were last seen (modulo π): the feet
+        turning on the carpet say the person turns, whichever way they face; a jump over
+        ``max_step_rad`` (a foot landing askew) turns nothing."""
+        if np.isnan(axis_rad):
+            return
+        if not np.isnan(self.last_axis_rad):
+            d = (axis_rad - self.last_axis_rad + np.pi / 2) % np.pi - np.pi / 2
+            if abs(d) <= max_step_rad:
+                c, s = np.cos(d), np.sin(d)
+                self.evidence = np.array([c * self.evidence[0] - s * self.evidence[1],
+                                          s * self.evidence[0] + c * self.evidence[1]])
+        self.last_axis_rad = axis_rad
 
     def _without_evidence(self, yaw: float) -> float | None:
         """The reference yaw when the feet say nothing: the yaw published last with ``hold_last``; with
@@ -281,21 +330,24 @@ class HeadingResolver:
         return self.last_yaw
 
 
-def sequence_cues(pressure_kpa: np.ndarray, pitch_m: float, params: HeadingParams) -> tuple[np.ndarray, np.ndarray]:
-    """(L,H,W) → ((L,2) frame cues, (L,) on their feet) of :func:`frame_cue`, frame by frame."""
-    cues = [frame_cue(f, pitch_m, params) for f in pressure_kpa]
-    return np.array([c for c, _ in cues]).reshape(-1, 2), np.array([f for _, f in cues], bool)
+def sequence_cues(pressure_kpa: np.ndarray, pitch_m: float,
+                  params: HeadingParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(L,H,W) → ((L,2) frame cues, (L,) on their feet, (L,) the feet's axis) of :func:`frame_evidence`."""
+    cues = [frame_evidence(f, pitch_m, params) for f in pressure_kpa]
+    return (np.array([c for c, _, _ in cues]).reshape(-1, 2), np.array([f for _, f, _ in cues], bool),
+            np.array([a for _, _, a in cues], np.float64))
 
 
-def resolve_sequence(pose_aa: np.ndarray, cues: tuple[np.ndarray, np.ndarray], activity_probs: np.ndarray | None,
+def resolve_sequence(pose_aa: np.ndarray, cues: tuple[np.ndarray, ...], activity_probs: np.ndarray | None,
                      params: HeadingParams, activity_weight: np.ndarray | None = None) -> np.ndarray:
     """(L,72) one track's poses frame by frame, their :func:`sequence_cues`, (L,A) activity probabilities
     or None → (L,72) what a fresh resolver publishes (offline evaluation and fitting)."""
     r = HeadingResolver(params, activity_weight)
     probs = [None] * len(pose_aa) if activity_probs is None else activity_probs
-    cue, on_feet = cues
-    return np.stack([r.decide(pose_aa[t], cue[t], probs[t], bool(on_feet[t])) for t in range(len(pose_aa))]).astype(np.float32)
+    cue, on_feet, axis = cues
+    return np.stack([r.decide(pose_aa[t], cue[t], probs[t], bool(on_feet[t]), float(axis[t]))
+                     for t in range(len(pose_aa))]).astype(np.float32)
 
 
 __all__ = ["HeadingParams", "HeadingResolver", "PARAMS_FILE", "load", "resolve_sequence", "sequence_cues", "cue_yaw_rad",
-           "foot_votes", "frame_cue", "turn_half", "upright_z", "yaw_rad"]
+           "feet", "foot_votes", "frame_cue", "frame_evidence", "turn_half", "upright_z", "yaw_rad"]

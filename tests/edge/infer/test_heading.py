@@ -204,3 +204,45 @@ def test_a_lying_body_is_not_turned_by_the_feet():
         out = r.decide(lying, np.zeros(2), on_feet=False)
         assert (r.flips == 1) == turned
         assert np.allclose(out[:3], lying[:3]) != turned
+
+
+def feet_facing(angle_rad: float, centre_m=(0.9, 0.9)) -> np.ndarray:
+    """(96,96) two heel-heavy feet 25 × 9 cm, 18 cm apart, toes toward (cos a, sin a) in (column, row)."""
+    ys, xs = (np.mgrid[0:96, 0:96] + 0.5) * PITCH
+    fwd, side = np.array([np.cos(angle_rad), np.sin(angle_rad)]), np.array([-np.sin(angle_rad), np.cos(angle_rad)])
+    p = np.zeros((96, 96), np.float32)
+    for sgn in (1, -1):
+        cx, cy = np.asarray(centre_m) + sgn * 0.09 * side
+        u = (xs - cx) * fwd[0] + (ys - cy) * fwd[1]
+        v = (xs - cx) * side[0] + (ys - cy) * side[1]
+        inside = (np.abs(u) <= 0.125) & (np.abs(v) <= 0.045)
+        p[inside] = (8.0 - 16.0 * u[inside])  # heel (−u) heavier: the CoP ~10 mm behind the centroid
+    return p
+
+
+@pytest.mark.parametrize("follow", [0.0, 30.0])
+def test_turning_on_the_spot_the_evidence_turns_with_the_feet(follow):
+    """A person faces +x for 3 s, then turns on the spot by 180° in 1.5 s while the model follows them
+    exactly: evidence that only decays lags behind and turns the model's right answer backwards;
+    evidence that turns with the feet's axis keeps it."""
+    params = HeadingParams(decay=0.99, max_evidence=30.0, min_evidence=0.5, follow_axis_deg=follow)
+    r = HeadingResolver(params)
+    angles = [0.0] * 42 + list(np.linspace(0.0, np.pi, 21)) + [np.pi] * 14
+    wrong = 0
+    for a in angles:
+        truth = cue_yaw_rad(np.array([np.cos(a), np.sin(a)]))
+        out = r.resolve(upright(truth), feet_facing(a), PITCH)
+        wrong += abs((yaw_rad(out[:3]) - truth + np.pi) % (2 * np.pi) - np.pi) > np.pi / 2
+    if follow:
+        assert wrong == 0
+    else:
+        assert wrong >= 5  # the lag this parameter exists to remove (11 frames today)
+
+
+def test_the_feet_axis_is_their_long_axis_and_none_when_they_disagree():
+    params = HeadingParams()
+    for a in (0.0, 0.6, -1.2, 2.0):
+        axis = heading.frame_evidence(feet_facing(a), PITCH, params)[2]
+        assert abs((axis - a + np.pi / 2) % np.pi - np.pi / 2) < 0.05
+    crossed = np.maximum(feet_facing(0.0, (0.5, 0.5)), feet_facing(np.pi / 2, (1.3, 1.3)))
+    assert np.isnan(heading.frame_evidence(crossed, PITCH, params)[2])
