@@ -11,6 +11,12 @@ from cavatar_common.errors import CliError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """The export commands: train, bundle, eval, finetune, bench."""
+    for add in (_add_train, _add_bundle, _add_eval, _add_finetune, _add_bench):
+        add(sub)
+
+
+def _add_train(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train the CAvatar model on a simulated dataset (needs the export extra)",
                        description="Train the CAvatar model in stages (export/stages.py): --stage frames (encoder, frames "
                        "drawn independently), --stage head (encoder frozen, cached features, windows drawn independently), "
@@ -52,6 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="never train on this activity (leave-one-activity-out); repeatable")
     t.set_defaults(func=run_train)
 
+
+def _add_bundle(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bundle", help="export a checkpoint to a quantized ONNX model bundle (needs the export extra)",
                        description="Export encoder/head ONNX (parity-checked), quantize (encoder static QDQ per channel, "
                        "head whatever measures best), gate int8 MPJPE against fp32 (≤ +0.3 cm) and write the bundle.")
@@ -62,6 +70,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--precision", default="int8", choices=("int8", "fp32"))
     b.set_defaults(func=run_bundle)
 
+
+def _add_eval(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser("eval", help="evaluate a model bundle on simulated subjects: paper-shaped tables (needs the export extra)",
                        description="Run a bundle as the board loads it (heading resolved from the feet, as the runtime "
                        "does) on a dataset and write the paper's tables: MPJPE (24 joints, pelvis-aligned), PA-MPJPE, "
@@ -91,6 +101,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--title", default="", help="title of the Markdown table")
     e.set_defaults(func=run_eval)
 
+
+def _add_finetune(sub: argparse._SubParsersAction) -> None:
     f = sub.add_parser("finetune", help="fine-tune a bundle on a new user's data (needs the export extra)",
                        description="Fine-tune a bundle on the first FRACTION of every track of a new user's recording "
                        "(lr 3e-5, the paper's recipe), hold out the rest in time, and write a new bundle (int8 gate and all).")
@@ -109,6 +121,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="int8 (default; must pass the int8 gate on the held-out frames) or fp32")
     f.set_defaults(func=run_finetune)
 
+
+def _add_bench(sub: argparse._SubParsersAction) -> None:
     from bench.speed_error_run import add_arguments as bench_arguments  # numpy only at import: torch comes with the run
 
     k = sub.add_parser("bench", help="speed against error of every model variant, and the measured ratios (needs the export extra)",
