@@ -95,30 +95,54 @@ def coverage_walk(cap: Capture, baseline: np.ndarray, noise: np.ndarray, fault: 
         return res.refuse(f"the walk holds only {raw.shape[0] / cap.rate_hz:.1f} s of good frames; walk for 60–90 s")
     unusable = (fault & UNUSABLE) > 0
     delta = raw - baseline[None]
+    if _check_sign(res, cap, delta, noise, unusable):
+        return res
+    d = cap.sign * delta
+    thr = activity_threshold(baseline, noise, cap.sign, cap.full_scale)
+    count = ((d > thr[None]) & ~unusable[None]).sum(axis=0).astype(np.int32)
+    new_fault = np.zeros(cap.shape, np.uint8)
+    line_faults: list[dict] = []
+    _dead_lines(res, count, (fault & FAULT["stuck"]) > 0, new_fault, line_faults)
+    gone = unusable | (new_fault > 0)
+    _weak_lines(res, d, thr, gone, new_fault, line_faults)
+    coverage = _coverage(res, cap, count, ~(gone | (new_fault & UNUSABLE > 0)), new_fault, shape_from_walk)
+    res.numbers.update(coverage_fraction=round(coverage, 4), line_faults=line_faults,
+                       dead_sensels=int((new_fault & FAULT["dead"] > 0).sum()),
+                       weak_sensels=int((new_fault & FAULT["weak"] > 0).sum()),
+                       crosstalk_r_norm=None)
+    res.arrays.update(coverage=count, fault=new_fault)
+    res.say(f"coverage: {coverage:.0%} of usable sensels stepped on at least once")
+    res.say("crosstalk (line loading) is not measurable from a walk; the readout's nominal value is used")
+    if coverage < MIN_COVERAGE:
+        return res.refuse(f"only {coverage:.0%} of the carpet was stepped on (need {MIN_COVERAGE:.0%}); "
+                          "keep walking over the empty areas of the map")
+    return res
+
+
+def _check_sign(res: StepResult, cap: Capture, delta: np.ndarray, noise: np.ndarray, unusable: np.ndarray) -> bool:
+    """Which way pressure moves the readings, against the board's sign; True when the step was refused."""
     big = np.abs(delta) > np.maximum(10.0 * noise, 0.03 * cap.full_scale)[None]
     big &= ~unusable[None]
     pos, neg = int((big & (delta > 0)).sum()), int((big & (delta < 0)).sum())
-    res.numbers.update(frames_used=int(raw.shape[0]), sign_votes={"up": pos, "down": neg})
+    res.numbers.update(frames_used=int(delta.shape[0]), sign_votes={"up": pos, "down": neg})
     if pos + neg < 50:
-        return res.refuse("nothing moved during the walk: was anyone walking on the carpet?")
+        res.refuse("nothing moved during the walk: was anyone walking on the carpet?")
+        return True
     measured = 1 if pos > neg else -1
     res.numbers["measured_sign"] = measured
     if measured != cap.sign and max(pos, neg) > 0.8 * (pos + neg):
-        return res.refuse(f"the board reports sign {cap.sign:+d}, but pressure moves the readings "
-                          f"{'up' if measured > 0 else 'down'} (sign {measured:+d}): the front end or the "
-                          "board's configuration is inverted. Fix the board's sign setting (or pass "
-                          f"--sign {measured:+d}) and calibrate again.", retry=False)
+        res.refuse(f"the board reports sign {cap.sign:+d}, but pressure moves the readings "
+                   f"{'up' if measured > 0 else 'down'} (sign {measured:+d}): the front end or the "
+                   "board's configuration is inverted. Fix the board's sign setting (or pass "
+                   f"--sign {measured:+d}) and calibrate again.", retry=False)
+        return True
     res.say(f"sign convention confirmed: pressure moves readings {'up' if cap.sign > 0 else 'down'} ({cap.sign:+d})")
+    return False
 
-    d = cap.sign * delta
-    thr = activity_threshold(baseline, noise, cap.sign, cap.full_scale)
-    active = (d > thr[None]) & ~unusable[None]
-    count = active.sum(axis=0).astype(np.int32)
-    h, w = cap.shape
-    stuck = (fault & FAULT["stuck"]) > 0
-    new_fault = np.zeros(cap.shape, np.uint8)
-    line_faults: list[dict] = []
 
+def _dead_lines(res: StepResult, count: np.ndarray, stuck: np.ndarray, new_fault: np.ndarray,
+                line_faults: list[dict]) -> None:
+    """Rows and columns (or runs of them) that never responded under the walk: dead, or a mux bank."""
     dead_by: dict[str, np.ndarray] = {}
     for axis in ("row", "col"):
         c = count if axis == "row" else count.T
@@ -142,31 +166,38 @@ def coverage_walk(cap: Capture, baseline: np.ndarray, noise: np.ndarray, fault: 
     for axis in ("row", "col"):
         dead = dead_by[axis] if axis == "row" else dead_by[axis].T
         new_fault[dead_by[axis]] |= FAULT["dead"]
-        frac = dead.mean(axis=1)
-        whole = [int(i) for i in np.flatnonzero(frac >= 0.75)]
-        runs: list[list[int]] = []
-        for i in whole:
-            if runs and i == runs[-1][-1] + 1:
-                runs[-1].append(i)
-            else:
-                runs.append([i])
-        for run in runs:
-            if len(run) >= 8:
-                line_faults.append({"kind": "mux_bank", "axis": axis, "start": run[0], "size": len(run), "found_by": "walk"})
-                res.say(f"{axis}s {run[0]}–{run[-1]} are dead together ({len(run)} lines): a failed multiplexer "
-                        "bank or connector; masked. Check the tile's ribbon cable.")
-            else:
-                for i in run:
-                    line_faults.append({"kind": "dead", "axis": axis, "index": i, "found_by": "walk"})
-                    res.say(f"{axis} {i} is dead (an open thread: no response under the walk): masked")
-        for i in np.flatnonzero((frac > 0) & (frac < 0.75)):
-            where_dead = np.flatnonzero(dead[i])
-            a, b = int(where_dead[0]), int(where_dead[-1])
-            line_faults.append({"kind": "dead", "axis": axis, "index": int(i), "start": a, "stop": b + 1, "found_by": "walk"})
-            res.say(f"{axis} {i} is dead from {'column' if axis == 'row' else 'row'} {a} to {b} (broken part-way): masked there")
+        _report_dead(res, axis, dead, line_faults)
 
-    # weak (half-dead) lines
-    gone = unusable | (new_fault > 0)
+
+def _report_dead(res: StepResult, axis: str, dead: np.ndarray, line_faults: list[dict]) -> None:
+    """One axis's dead lines (lines × positions) as line faults: whole lines, runs of ≥ 8 (a mux bank), part-way."""
+    frac = dead.mean(axis=1)
+    whole = [int(i) for i in np.flatnonzero(frac >= 0.75)]
+    runs: list[list[int]] = []
+    for i in whole:
+        if runs and i == runs[-1][-1] + 1:
+            runs[-1].append(i)
+        else:
+            runs.append([i])
+    for run in runs:
+        if len(run) >= 8:
+            line_faults.append({"kind": "mux_bank", "axis": axis, "start": run[0], "size": len(run), "found_by": "walk"})
+            res.say(f"{axis}s {run[0]}–{run[-1]} are dead together ({len(run)} lines): a failed multiplexer "
+                    "bank or connector; masked. Check the tile's ribbon cable.")
+        else:
+            for i in run:
+                line_faults.append({"kind": "dead", "axis": axis, "index": i, "found_by": "walk"})
+                res.say(f"{axis} {i} is dead (an open thread: no response under the walk): masked")
+    for i in np.flatnonzero((frac > 0) & (frac < 0.75)):
+        where_dead = np.flatnonzero(dead[i])
+        a, b = int(where_dead[0]), int(where_dead[-1])
+        line_faults.append({"kind": "dead", "axis": axis, "index": int(i), "start": a, "stop": b + 1, "found_by": "walk"})
+        res.say(f"{axis} {i} is dead from {'column' if axis == 'row' else 'row'} {a} to {b} (broken part-way): masked there")
+
+
+def _weak_lines(res: StepResult, d: np.ndarray, thr: np.ndarray, gone: np.ndarray, new_fault: np.ndarray,
+                line_faults: list[dict]) -> None:
+    """Half-dead lines: responding much less than their neighbours under the same walk."""
     for axis in ("row", "col"):
         dd = d if axis == "row" else np.transpose(d, (0, 2, 1))
         th = thr if axis == "row" else thr.T
@@ -182,8 +213,12 @@ def coverage_walk(cap: Capture, baseline: np.ndarray, noise: np.ndarray, fault: 
             res.say(f"{axis} {i} is half-dead: it responds {ratio[i]:.0%} as strongly as its neighbours; "
                     "its gain comes from the board step (masked if too weak to correct)")
 
-    # coverage
-    usable_now = ~(gone | (new_fault & UNUSABLE > 0))
+
+def _coverage(res: StepResult, cap: Capture, count: np.ndarray, usable_now: np.ndarray, new_fault: np.ndarray,
+              shape_from_walk: bool) -> float:
+    """The share of usable sensels stepped on; the largest untouched areas said (or, on the border with
+    ``shape_from_walk``, marked outside the carpet)."""
+    h, w = cap.shape
     touched = (count > 0) & usable_now
     coverage = float(touched.sum() / max(usable_now.sum(), 1))
     untouched = usable_now & (count == 0)
@@ -203,14 +238,4 @@ def coverage_walk(cap: Capture, baseline: np.ndarray, noise: np.ndarray, fault: 
         else:
             res.say(f"{size} sensels at {where_text(sl[0], sl[1], cap.pitch_m, cap.shape)} were never stepped on: "
                     "walk there (or, if the carpet has no sensels there, pass --mask / --shape-from-walk)")
-    res.numbers.update(coverage_fraction=round(coverage, 4), line_faults=line_faults,
-                       dead_sensels=int((new_fault & FAULT["dead"] > 0).sum()),
-                       weak_sensels=int((new_fault & FAULT["weak"] > 0).sum()),
-                       crosstalk_r_norm=None)
-    res.arrays.update(coverage=count, fault=new_fault)
-    res.say(f"coverage: {coverage:.0%} of usable sensels stepped on at least once")
-    res.say("crosstalk (line loading) is not measurable from a walk; the readout's nominal value is used")
-    if coverage < MIN_COVERAGE:
-        return res.refuse(f"only {coverage:.0%} of the carpet was stepped on (need {MIN_COVERAGE:.0%}); "
-                          "keep walking over the empty areas of the map")
-    return res
+    return coverage
