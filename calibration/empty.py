@@ -70,16 +70,40 @@ def empty_capture(cap: Capture, min_duration_s: float = MIN_DURATION_S) -> StepR
     base_d = np.where(np.isnan(base_d), b0, base_d)
     baseline = (sign * base_d).astype(np.float32)
 
-    # stuck sensels and lines: a rail code nearly always, or no change at all
+    fault = np.zeros(cap.shape, np.uint8)
+    line_faults: list[dict] = []
+    stuckish, lone, rail_blob = _stuck(res, raw, fs, fault, line_faults)
+    healthy = ~stuckish | rail_blob
+    typical = _noisy(res, noise, healthy, fault, line_faults)
+    lsb10 = 2.0 ** (int(cap.device["adc_bits"]) - 10)
+    res.numbers.update(noise_median_counts=round(typical, 3), noise_median_lsb10=round(typical / lsb10, 3),
+                       baseline_median_counts=round(float(np.median(baseline[healthy])) if healthy.any() else 0.0, 2),
+                       stuck_sensels=int((fault & FAULT["stuck"] > 0).sum()), noisy_sensels=int((fault & FAULT["noisy"] > 0).sum()),
+                       loaded_fraction=round(float(loaded[:, healthy].mean()) if healthy.any() else 0.0, 4))
+    res.arrays.update(baseline_counts=baseline, noise_counts=noise.astype(np.float32), fault=fault)
+    res.numbers["line_faults"] = line_faults
+    if typical / lsb10 > MAX_NOISE_LSB10:
+        return res.refuse(f"the carpet is too noisy: median σ {typical:.1f} counts ({typical / lsb10:.1f} at 10 bit, "
+                          f"limit {MAX_NOISE_LSB10:g}). Look for a mains/motor source nearby, a loose ground or "
+                          "someone moving on the carpet, then capture again.")
+    if _someone_on_it(res, cap, d, base_d, baseline, noise, fault, lone, rail_blob, line_faults):
+        return res
+    res.say(f"baseline median {res.numbers['baseline_median_counts']:.1f} counts, noise σ {typical:.2f} counts "
+            f"({n} frames, {n / cap.rate_hz:.1f} s)")
+    return res
+
+
+def _stuck(res: StepResult, raw: np.ndarray, fs: int, fault: np.ndarray,
+           line_faults: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stuck sensels and lines (a rail code nearly always, or no change at all) → (stuck-ish sensels,
+    lone ones marked short for now, patches at the rail that are a load, not a fault)."""
     rail_hi, rail_lo = raw >= fs, raw <= 0
     at_rail = (rail_hi.mean(axis=0) >= 0.9) | (rail_lo.mean(axis=0) >= 0.9)
     frozen = (raw.max(axis=0) == raw.min(axis=0))
     stuckish = at_rail | frozen
-    fault = np.zeros(cap.shape, np.uint8)
-    line_faults: list[dict] = []
     stuck_rows = np.flatnonzero(stuckish.mean(axis=1) >= 0.5)
     stuck_cols = np.flatnonzero(stuckish.mean(axis=0) >= 0.5)
-    line_mask = np.zeros(cap.shape, bool)
+    line_mask = np.zeros(fault.shape, bool)
     line_mask[stuck_rows, :] = True
     line_mask[:, stuck_cols] = True
     fault[line_mask & stuckish] |= FAULT["stuck"]
@@ -92,13 +116,16 @@ def empty_capture(cap: Capture, min_duration_s: float = MIN_DURATION_S) -> StepR
     sizes = np.bincount(lab.ravel())
     rail_blob = lone & (sizes[lab] >= 3)  # a patch at the rail is a load (someone standing), not a fault
     lone &= ~rail_blob
-    fault[lone] |= FAULT["short"]  # provisional: confirmed below unless next to someone standing
+    fault[lone] |= FAULT["short"]  # provisional: confirmed by _someone_on_it unless next to someone standing
+    return stuckish, lone, rail_blob
 
-    # noisy lines and sensels
-    healthy = ~stuckish | rail_blob
+
+def _noisy(res: StepResult, noise: np.ndarray, healthy: np.ndarray, fault: np.ndarray, line_faults: list[dict]) -> float:
+    """Noisy lines and single sensels masked; → the typical noise (counts) of the healthy sensels."""
     typical = float(np.median(noise[healthy])) if healthy.any() else float(np.median(noise))
-    row_noise = np.array([np.median(noise[r][healthy[r]]) if healthy[r].any() else 0 for r in range(cap.shape[0])])
-    col_noise = np.array([np.median(noise[:, c][healthy[:, c]]) if healthy[:, c].any() else 0 for c in range(cap.shape[1])])
+    rows, cols = noise.shape
+    row_noise = np.array([np.median(noise[r][healthy[r]]) if healthy[r].any() else 0 for r in range(rows)])
+    col_noise = np.array([np.median(noise[:, c][healthy[:, c]]) if healthy[:, c].any() else 0 for c in range(cols)])
     for axis, arr in (("row", row_noise), ("col", col_noise)):
         for i in np.flatnonzero(arr > 3.0 * typical):
             sl = (i, slice(None)) if axis == "row" else (slice(None), i)
@@ -110,20 +137,15 @@ def empty_capture(cap: Capture, min_duration_s: float = MIN_DURATION_S) -> StepR
     fault[lone_noisy] |= FAULT["noisy"]
     if lone_noisy.any():
         res.say(f"{int(lone_noisy.sum())} single noisy sensels masked")
+    return typical
 
-    lsb10 = 2.0 ** (int(cap.device["adc_bits"]) - 10)
-    res.numbers.update(noise_median_counts=round(typical, 3), noise_median_lsb10=round(typical / lsb10, 3),
-                       baseline_median_counts=round(float(np.median(baseline[healthy])) if healthy.any() else 0.0, 2),
-                       stuck_sensels=int((fault & FAULT["stuck"] > 0).sum()), noisy_sensels=int((fault & FAULT["noisy"] > 0).sum()),
-                       loaded_fraction=round(float(loaded[:, healthy].mean()) if healthy.any() else 0.0, 4))
-    res.arrays.update(baseline_counts=baseline, noise_counts=noise.astype(np.float32), fault=fault)
-    res.numbers["line_faults"] = line_faults
-    if typical / lsb10 > MAX_NOISE_LSB10:
-        return res.refuse(f"the carpet is too noisy: median σ {typical:.1f} counts ({typical / lsb10:.1f} at 10 bit, "
-                          f"limit {MAX_NOISE_LSB10:g}). Look for a mains/motor source nearby, a loose ground or "
-                          "someone moving on the carpet, then capture again.")
 
-    # someone on the carpet: raised blobs against the local carpet level
+def _someone_on_it(res: StepResult, cap: Capture, d: np.ndarray, base_d: np.ndarray, baseline: np.ndarray,
+                   noise: np.ndarray, fault: np.ndarray, lone: np.ndarray, rail_blob: np.ndarray,
+                   line_faults: list[dict]) -> bool:
+    """Someone on the carpet: raised blobs against the local carpet level. Confirms the lone shorts that
+    are not next to a load; True when the step was refused (someone stood there the whole capture)."""
+    fs, sign, n = cap.full_scale, cap.sign, d.shape[0]
     usable = (fault == 0)
     level = _local_level(base_d, usable, cap.pitch_m)
     room = np.abs((fs if sign > 0 else 0) - baseline)
@@ -147,18 +169,17 @@ def empty_capture(cap: Capture, min_duration_s: float = MIN_DURATION_S) -> StepR
         res.say(f"someone was on the carpet in {part:.0%} of the frames; the baseline uses only the frames "
                 "where each sensel was free")
     res.numbers["occupied_frame_fraction"] = round(float(part), 3)
-    if blobs:
-        blobs.sort(key=lambda b: -b[0])
-        res.numbers["people_blobs"] = [{"rows": [s[0].start, s[0].stop - 1], "cols": [s[1].start, s[1].stop - 1],
-                                        "sensels": n_} for n_, s in blobs]
-        groups = _group(blobs, cap.pitch_m)
-        where = "; ".join(where_text(rs, cs, cap.pitch_m, cap.shape) for rs, cs in groups[:3])
-        who = "someone (or something) is" if len(groups) == 1 else f"{len(groups)} people or objects are"
-        return res.refuse(f"{who} on the carpet during the whole capture at {where}. "
-                          "Ask them to step off (or remove the object), then capture again.")
-    res.say(f"baseline median {res.numbers['baseline_median_counts']:.1f} counts, noise σ {typical:.2f} counts "
-            f"({n} frames, {n / cap.rate_hz:.1f} s)")
-    return res
+    if not blobs:
+        return False
+    blobs.sort(key=lambda b: -b[0])
+    res.numbers["people_blobs"] = [{"rows": [s[0].start, s[0].stop - 1], "cols": [s[1].start, s[1].stop - 1],
+                                    "sensels": n_} for n_, s in blobs]
+    groups = _group(blobs, cap.pitch_m)
+    where = "; ".join(where_text(rs, cs, cap.pitch_m, cap.shape) for rs, cs in groups[:3])
+    who = "someone (or something) is" if len(groups) == 1 else f"{len(groups)} people or objects are"
+    res.refuse(f"{who} on the carpet during the whole capture at {where}. "
+               "Ask them to step off (or remove the object), then capture again.")
+    return True
 
 
 def _local_level(base_d: np.ndarray, usable: np.ndarray, pitch_m: float) -> np.ndarray:
