@@ -7,7 +7,7 @@
     ft.load_fraction          # (T,) share of the body weight on the carpet (a chair carries the rest)
 
 A scenario is a keyframe timeline (sim.motion.keys) of whole-body poses. Unlike the activities
-(sim.motion.activities, placed by Rig.ground with locked contacts), the body is placed here by a
+(sim.motion.activities, placed by sim.motion.ground with locked contacts), the body is placed here by a
 simple rule that also holds while it topples: every frame the lowest vertex touches the floor,
 and one anchor (the feet's midpoint while on the feet, the pelvis while on the floor, the knees
 while kneeling) keeps its place on the floor across the frame. Falls pivot about the feet and land

@@ -9,6 +9,7 @@ import numpy as np
 from edge.body import BodyModel
 from sim.motion import activities as acts
 from sim.motion.activities import ACTIVITIES, FEET, STANDING, mirror
+from sim.motion.ground import ground
 from sim.motion.keys import BASE, Timeline, contacts, pose
 from sim.motion.pace import Pacer
 from sim.motion.rig import (
@@ -262,7 +263,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     facing heading_rad (0: facing −y). Walking goes between random spots within
     walk_radius_m of the start (walk_line: back and forth on one line, as scene() uses with
     others on the carpet). Feet are locked while they bear weight and the body rests on the
-    floor (see Rig.ground)."""
+    floor (see sim.motion.ground)."""
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     rig = Rig(_model(model), subject.betas)
     style = subject.style
@@ -301,8 +302,8 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     balance = np.ones(n, bool)  # walking too: its COM follows the path whose ZMP is on the stance foot
     seated = lab == ACTIVITIES.index("sitting")
     walking = lab == ACTIVITIES.index("walking")  # its swinging feet follow planned paths (sim.motion.swing)
-    transl = rig.ground(local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
-                        seated=seated, swing=walking)
+    transl = ground(rig, local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
+                    seated=seated, swing=walking)
     pose_aa = matrix_to_rotvec(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
 
