@@ -32,8 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.motion.activities import ACTIVITIES, SIT_BENT, SIT_LONG, mirror
-from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, _model, person_track
+from sim.motion.activities import ACTIVITIES, mirror
+from sim.motion.floor_activities import SIT_BENT, SIT_LONG
+from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, body_model, person_track
 from sim.motion.keys import BASE, Timeline, pose
 from sim.motion.rig import UPRIGHT, J, euler_deg_to_matrix, matrix_to_rotvec, rot_z
 
@@ -90,7 +91,7 @@ def settle(p: np.ndarray, model=None) -> np.ndarray:
     on the floor comes to rest on its hip, shoulder and thigh, not balanced on a foot and a hand."""
     key = p.tobytes()
     if key not in _SETTLED:
-        body = _model(model)
+        body = body_model(model)
         d = np.arange(-30, 31, 5.0)
         cand = np.repeat(p[None], len(d) ** 2, axis=0)
         cand[:, 0, 0] += np.repeat(d, len(d))
@@ -268,7 +269,7 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown fall scenario {scenario!r}; expected one of {SCENARIOS}")
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    body = _model(model)
+    body = body_model(model)
     lie_s = _u(rng, 35.0, 50.0) if lie_s is None else float(lie_s)
     get_up = bool(rng.random() < 0.5) if get_up is None else bool(get_up)
     lead = None
@@ -314,7 +315,7 @@ def on_carpet(ft: FallTrack, carpet_size_m=(1.83, 1.83), rng=None, model=None, m
     """The scenario turned and shifted so every vertex stays margin_m inside the carpet in every frame
     (turns tried in random order, the shift drawn among those that fit); ValueError when none fits."""
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    body = _model(model)
+    body = body_model(model)
     tr = ft.track
     pts = body.forward(tr.pose_aa[::3], tr.betas, tr.transl_m[::3], vertices=True)["vertices"][:, ::4, :2].reshape(-1, 2)
     size = np.asarray(carpet_size_m, float)
