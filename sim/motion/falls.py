@@ -32,11 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from edge.body.rotations import euler_xyz_deg_to_matrix, matrix_to_axis_angle
 from sim.motion.activities import ACTIVITIES, mirror
 from sim.motion.floor_activities import SIT_BENT, SIT_LONG
 from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, body_model, person_track
 from sim.motion.keys import BASE, Timeline, pose
-from sim.motion.rig import UPRIGHT, J, euler_deg_to_matrix, matrix_to_rotvec, rot_z
+from sim.motion.rig import UPRIGHT, J, rot_z
 
 FALLS = ("fall_forward", "fall_backward", "fall_sideways", "walk_fall_forward", "walk_fall_sideways",
          "chair_slump", "chair_slide", "slow_collapse")
@@ -96,9 +97,9 @@ def settle(p: np.ndarray, model=None) -> np.ndarray:
         cand = np.repeat(p[None], len(d) ** 2, axis=0)
         cand[:, 0, 0] += np.repeat(d, len(d))
         cand[:, 0, 2] += np.tile(d, len(d))
-        local = euler_deg_to_matrix(cand)
+        local = euler_xyz_deg_to_matrix(cand)
         local[:, 0] = UPRIGHT @ local[:, 0]
-        out = body.forward(matrix_to_rotvec(local).reshape(len(cand), 72), None, None, vertices=True)
+        out = body.forward(matrix_to_axis_angle(local).reshape(len(cand), 72), None, None, vertices=True)
         height = out["joints"][:, 0, 2] - out["vertices"][:, :, 2].min(axis=1)  # the pelvis above the floor
         turn = np.abs(cand[:, 0, 0] - p[0, 0]) + np.abs(cand[:, 0, 2] - p[0, 2])
         _SETTLED[key] = cand[int(np.argmin(height + 0.0004 * turn))]  # no turn for less than ~1 cm
@@ -282,9 +283,9 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
     s = _script(scenario, rng, subject.style.tempo, lie_s, get_up, int(rng.integers(0, 2)))
     n = int(round(s.tl.duration_s * rate_hz)) + 1
     euler, heading, _, _, _, label = s.tl.sample(n, rate_hz, BASE, head)
-    local = euler_deg_to_matrix(euler)
+    local = euler_xyz_deg_to_matrix(euler)
     local[:, 0] = rot_z(heading) @ UPRIGHT @ local[:, 0]
-    pose_aa = matrix_to_rotvec(local).reshape(n, 72)
+    pose_aa = matrix_to_axis_angle(local).reshape(n, 72)
     ends = np.cumsum([k.dur_s for k in s.tl.keys])
     key = np.minimum(np.searchsorted(ends, np.arange(n) / rate_hz, side="right"), len(ends) - 1)
     anchor = np.array(s.anchor)[key]

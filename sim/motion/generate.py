@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from edge.body import BodyModel
+from edge.body.rotations import euler_xyz_deg_to_matrix, matrix_to_axis_angle
 from sim.motion import floor_activities, upright_activities
 from sim.motion.activities import ACTIVITIES, VERTICAL_ACC_LIMIT_M_S2
 from sim.motion.ground import ground
@@ -18,8 +19,6 @@ from sim.motion.rig import (
     UPRIGHT,
     J,
     Rig,
-    euler_deg_to_matrix,
-    matrix_to_rotvec,
     rot_z,
 )
 from sim.motion.walking import walking
@@ -190,7 +189,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     on_hands = np.convolve(contact[:, 2] | contact[:, 3], np.ones(9), "full")[4 : 4 + n] > 0
     sway[on_hands, 0] = 0.0
     euler = euler + sway
-    local = euler_deg_to_matrix(euler)
+    local = euler_xyz_deg_to_matrix(euler)
     local[:, 0] = rot_z(heading) @ UPRIGHT @ local[:, 0]
     toe = np.radians(style.toe_out_deg)
     foot_yaw = np.stack([heading + toe, heading - toe], 1)
@@ -200,7 +199,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     walking_frames = lab == ACTIVITIES.index("walking")  # its swinging feet follow planned paths (sim.motion.swing)
     transl = ground(rig, local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
                     seated=seated, swing=walking_frames)
-    pose_aa = matrix_to_rotvec(local).reshape(n, 72)
+    pose_aa = matrix_to_axis_angle(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
 
 

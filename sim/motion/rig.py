@@ -11,8 +11,6 @@ from __future__ import annotations
 import numpy as np
 
 from edge.body import SMPL_PARENTS, BodyModel, lbs
-from edge.body.rotations import euler_xyz_deg_to_matrix as euler_deg_to_matrix  # noqa: F401  (sim.motion uses these names)
-from edge.body.rotations import matrix_to_axis_angle as matrix_to_rotvec  # noqa: F401
 from edge.body.rotations import skew
 from sim.motion.balance import foot_geometry
 

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from edge.body.rotations import euler_xyz_deg_to_matrix
 from sim.motion.activities import FEET, HEEL_OFF_DEG, STANDING, mirror, styled, uniform
 from sim.motion.keys import BASE, Timeline, contacts, pose
-from sim.motion.rig import LF, RF, UPRIGHT, J, Rig, euler_deg_to_matrix
+from sim.motion.rig import LF, RF, UPRIGHT, J, Rig
 
 
 def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0: float, line: bool = False) -> Timeline:
@@ -19,7 +20,7 @@ def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0
     mid = pose(left_hip=(-2, 4, 0), left_knee=(6, 0, 0), right_hip=(-26, -4, 0), right_knee=(55, 0, 0), right_ankle=(-8, 0, 0),
                root=(0, 0, -2))
     # Step length of this body from the double-support pose.
-    local = euler_deg_to_matrix(ds[None])
+    local = euler_xyz_deg_to_matrix(ds[None])
     local[:, 0] = UPRIGHT @ local[:, 0]
     _, g = rig.fk(local)
     step = abs(g[0, J["left_ankle"], 1] - g[0, J["right_ankle"], 1])
