@@ -14,7 +14,8 @@ Upright = +90° about x in pose_aa[0:3], facing −y at heading 0. Known gaps: d
 """
 
 from sim.motion.activities import ACTIVITIES
-from sim.motion.generate import DEFAULT_RATE_HZ, Scene, Style, Subject, Track, box_gaps, person_track, scene
+from sim.motion.generate import DEFAULT_RATE_HZ, Scene, Style, Subject, Track, person_track
+from sim.motion.placement import box_gaps, scene
 from sim.motion.rig import CONTACT_PARTS
 
 __all__ = ["ACTIVITIES", "CONTACT_PARTS", "DEFAULT_RATE_HZ", "Scene", "Style", "Subject", "Track", "box_gaps", "person_track", "scene"]

@@ -16,7 +16,7 @@ standing COM height z):
 solved as one tridiagonal system over the sequence. The COM therefore starts moving
 toward the stance foot before the swing foot lifts (an anticipatory weight shift), and
 its ZMP, where the contact physics puts the COP, never leaves the support.
-``Rig.ground`` shifts the pelvis (feet stay locked, the legs follow by IK) until the
+``sim.motion.posture.balance_com`` shifts the pelvis (feet stay locked, the legs follow by IK) until the
 segment-model COM follows x.
 """
 

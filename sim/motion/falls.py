@@ -7,7 +7,7 @@
     ft.load_fraction          # (T,) share of the body weight on the carpet (a chair carries the rest)
 
 A scenario is a keyframe timeline (sim.motion.keys) of whole-body poses. Unlike the activities
-(sim.motion.activities, placed by Rig.ground with locked contacts), the body is placed here by a
+(sim.motion.activities, placed by sim.motion.ground with locked contacts), the body is placed here by a
 simple rule that also holds while it topples: every frame the lowest vertex touches the floor,
 and one anchor (the feet's midpoint while on the feet, the pelvis while on the floor, the knees
 while kneeling) keeps its place on the floor across the frame. Falls pivot about the feet and land
@@ -32,10 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.motion.activities import ACTIVITIES, SIT_BENT, SIT_LONG, mirror
-from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, _model, person_track
+from edge.body.rotations import euler_xyz_deg_to_matrix, matrix_to_axis_angle
+from sim.motion.activities import ACTIVITIES, mirror
+from sim.motion.floor_activities import SIT_BENT, SIT_LONG
+from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, body_model, person_track
 from sim.motion.keys import BASE, Timeline, pose
-from sim.motion.rig import UPRIGHT, J, euler_deg_to_matrix, matrix_to_rotvec, rot_z
+from sim.motion.rig import UPRIGHT, J, rot_z
 
 FALLS = ("fall_forward", "fall_backward", "fall_sideways", "walk_fall_forward", "walk_fall_sideways",
          "chair_slump", "chair_slide", "slow_collapse")
@@ -90,14 +92,14 @@ def settle(p: np.ndarray, model=None) -> np.ndarray:
     on the floor comes to rest on its hip, shoulder and thigh, not balanced on a foot and a hand."""
     key = p.tobytes()
     if key not in _SETTLED:
-        body = _model(model)
+        body = body_model(model)
         d = np.arange(-30, 31, 5.0)
         cand = np.repeat(p[None], len(d) ** 2, axis=0)
         cand[:, 0, 0] += np.repeat(d, len(d))
         cand[:, 0, 2] += np.tile(d, len(d))
-        local = euler_deg_to_matrix(cand)
+        local = euler_xyz_deg_to_matrix(cand)
         local[:, 0] = UPRIGHT @ local[:, 0]
-        out = body.forward(matrix_to_rotvec(local).reshape(len(cand), 72), None, None, vertices=True)
+        out = body.forward(matrix_to_axis_angle(local).reshape(len(cand), 72), None, None, vertices=True)
         height = out["joints"][:, 0, 2] - out["vertices"][:, :, 2].min(axis=1)  # the pelvis above the floor
         turn = np.abs(cand[:, 0, 0] - p[0, 0]) + np.abs(cand[:, 0, 2] - p[0, 2])
         _SETTLED[key] = cand[int(np.argmin(height + 0.0004 * turn))]  # no turn for less than ~1 cm
@@ -268,7 +270,7 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown fall scenario {scenario!r}; expected one of {SCENARIOS}")
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    body = _model(model)
+    body = body_model(model)
     lie_s = _u(rng, 35.0, 50.0) if lie_s is None else float(lie_s)
     get_up = bool(rng.random() < 0.5) if get_up is None else bool(get_up)
     lead = None
@@ -281,9 +283,9 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
     s = _script(scenario, rng, subject.style.tempo, lie_s, get_up, int(rng.integers(0, 2)))
     n = int(round(s.tl.duration_s * rate_hz)) + 1
     euler, heading, _, _, _, label = s.tl.sample(n, rate_hz, BASE, head)
-    local = euler_deg_to_matrix(euler)
+    local = euler_xyz_deg_to_matrix(euler)
     local[:, 0] = rot_z(heading) @ UPRIGHT @ local[:, 0]
-    pose_aa = matrix_to_rotvec(local).reshape(n, 72)
+    pose_aa = matrix_to_axis_angle(local).reshape(n, 72)
     ends = np.cumsum([k.dur_s for k in s.tl.keys])
     key = np.minimum(np.searchsorted(ends, np.arange(n) / rate_hz, side="right"), len(ends) - 1)
     anchor = np.array(s.anchor)[key]
@@ -314,7 +316,7 @@ def on_carpet(ft: FallTrack, carpet_size_m=(1.83, 1.83), rng=None, model=None, m
     """The scenario turned and shifted so every vertex stays margin_m inside the carpet in every frame
     (turns tried in random order, the shift drawn among those that fit); ValueError when none fits."""
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    body = _model(model)
+    body = body_model(model)
     tr = ft.track
     pts = body.forward(tr.pose_aa[::3], tr.betas, tr.transl_m[::3], vertices=True)["vertices"][:, ::4, :2].reshape(-1, 2)
     size = np.asarray(carpet_size_m, float)

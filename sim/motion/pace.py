@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from sim.motion.rig import BUTT, CONTACT_PARTS, SETTLE, UPRIGHT, euler_deg_to_matrix
+from edge.body.rotations import euler_xyz_deg_to_matrix
+from sim.motion.rig import BUTT, CONTACT_PARTS, SETTLE, UPRIGHT
 from sim.motion.spans import min_jerk
 
 MIN_JERK_PEAK_ACC = 10.0 / math.sqrt(3.0)  # max |s''| of s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ on [0, 1]
@@ -50,7 +51,7 @@ class Pacer:
         pose_deg = np.asarray(pose_deg, float)
         one = pose_deg.ndim == 2
         poses = pose_deg[None] if one else pose_deg
-        local = euler_deg_to_matrix(poses)
+        local = euler_xyz_deg_to_matrix(poses)
         local[:, 0] = UPRIGHT @ local[:, 0]
         g_rot, g_t = self.rig.fk(local)
         com_z = self.rig.mass_model.com_from_fk(g_rot, g_t)[:, 2]

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+SMOOTH_FRAMES = 4  # frames over which the ground solve spreads a correction of the pelvis (sim.motion.ground)
+
 
 def min_jerk(s: np.ndarray) -> np.ndarray:
     """Minimum-jerk time warp of s in [0, 1] (zero velocity and acceleration at the ends)."""

@@ -8,7 +8,8 @@ from scipy.spatial.transform import Rotation
 
 from edge.body import BodyModel
 from sim.motion import ACTIVITIES, CONTACT_PARTS, Subject, Track, person_track, scene
-from sim.motion.rig import _SACRUM_DROP, LOCK_JOINT, Rig
+from sim.motion.posture import SACRUM_DROP_M
+from sim.motion.rig import LOCK_JOINT, Rig
 
 RATE = 14.0
 SECONDS = 8.0
@@ -73,9 +74,9 @@ def test_scheduled_contacts_touch_the_floor(tracks, name):
         on = tr.contact[:, p]
         if on.any():
             low = v[on][:, rig.part_vertices[p], 2].min(1)
-            # Supine, the heavy pelvis sinks deeper into its soft tissue than the back (rig._SACRUM_DROP):
+            # Supine, the heavy pelvis sinks deeper into its soft tissue than the back (posture.SACRUM_DROP_M):
             # the back's rigid surface may stay up to that much higher; the contact physics loads both.
-            limit = 0.015 + (_SACRUM_DROP if CONTACT_PARTS[p] == "back" else 0.0)
+            limit = 0.015 + (SACRUM_DROP_M if CONTACT_PARTS[p] == "back" else 0.0)
             assert low.max() < limit, f"{CONTACT_PARTS[p]} scheduled on the floor but {low.max() * 100:.1f} cm up"
 
 
@@ -165,7 +166,7 @@ def test_scene_refuses_impossible():
 
 
 def test_sit_up_trunk_rises_and_lies_down_without_a_dip():
-    """Around a sit-up's lying span the root keeps the lying correction (Rig._rest_on_back) and
+    """Around a sit-up's lying span the root keeps the lying correction (sim.motion.posture.rest_on_back) and
     lets it fade over the curl: the trunk's elevation rises steadily as the back leaves the floor
     and falls steadily as it lands. Before, the correction was refitted to the rising back and
     faded in four frames: the trunk dipped back ~9° in one frame (a 1 cm pelvis jump)."""

@@ -1,0 +1,118 @@
+"""Walking as a keyframe timeline: steps between random spots near the start, turning toward
+each (a builder as ``sim.motion.activities`` describes, which also takes the body's rig for
+its step length, where to walk and the heading it starts at)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from edge.body.rotations import euler_xyz_deg_to_matrix
+from sim.motion.activities import FEET, HEEL_OFF_DEG, STANDING, mirror, styled, uniform
+from sim.motion.keys import BASE, Timeline, contacts, pose
+from sim.motion.rig import LF, RF, UPRIGHT, J, Rig
+
+
+def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0: float, line: bool = False) -> Timeline:
+    """Walk between random spots within home_radius_m of the start, turning toward each
+    (line: back and forth between spots on one line through the start, along heading0 + 90°)."""
+    ds = pose(left_hip=(-22, 4, 0), left_knee=(6, 0, 0), right_hip=(14, -4, 0), right_knee=(10, 0, 0),
+              left_shoulder=(14, 0, -74), right_shoulder=(-16, 0, 74))
+    mid = pose(left_hip=(-2, 4, 0), left_knee=(6, 0, 0), right_hip=(-26, -4, 0), right_knee=(55, 0, 0), right_ankle=(-8, 0, 0),
+               root=(0, 0, -2))
+    # Step length of this body from the double-support pose.
+    local = euler_xyz_deg_to_matrix(ds[None])
+    local[:, 0] = UPRIGHT @ local[:, 0]
+    _, g = rig.fk(local)
+    step = abs(g[0, J["left_ankle"], 1] - g[0, J["right_ankle"], 1])
+    a = style.amplitude
+    ds, mid = styled(ds, style, a), styled(mid, style, a)
+    tl = Timeline()
+    lead = min(uniform(rng, 0.3, 0.7), 0.15 * seconds)
+    tl.add(lead, BASE, FEET, LF, label=STANDING)
+    pos, head = np.zeros(2), heading0
+    target = None
+    stance = RF  # the first step is taken with the left foot
+    t_left = seconds - lead - 1.0 * style.tempo
+    step_dur = 0.55 * style.tempo
+    front = None  # which foot is in front now (None: feet together)
+    while t_left > 2 * step_dur:
+        if target is None or np.linalg.norm(target - pos) < 0.35:
+            if target is not None and rng.random() < 0.5:  # pause at the spot
+                pause = min(uniform(rng, 0.3, 1.0), t_left - 2 * step_dur)
+                if front is not None:  # bring the feet together first
+                    t_left -= _close_feet(tl, front, mid, step_dur, label)
+                    pos = pos + 0.5 * step * np.array([np.sin(head), -np.cos(head)])
+                    front, stance = None, front
+                tl.add(pause, BASE, FEET, stance, label=STANDING)
+                t_left -= pause
+            target = _next_spot(rng, pos, home_radius_m, heading0, line)
+        d = target - pos
+        want = np.arctan2(d[0], -d[1])
+        err = (want - head + np.pi) % (2 * np.pi) - np.pi
+        turn = float(np.clip(err, -np.radians(40), np.radians(40)))
+        # Short steps while turning toward a spot off to the side, and when close to it.
+        short = float(np.clip(np.cos(err - turn) * min(1.0, np.linalg.norm(d) / step), 0.35, 1.0))
+        swing = LF if stance == RF else RF
+        if front is None:  # from the feet together: the weight goes onto the stance foot as the swing heel rises
+            heel_start = [0.0, 0.0]
+            heel_start[swing] = START_HEEL_OFF_DEG * a
+            tl.add(START_DS_S * style.tempo, BASE, FEET, stance, heel=heel_start, label=label)
+            t_left -= START_DS_S * style.tempo
+        # Swing through the mid pose into double support with the swing foot in front.
+        ds_k = BASE + (ds - BASE) * short
+        end = mirror(ds_k) if swing == RF else ds_k
+        m = mirror(mid) if swing == LF else mid
+        frac = 0.5 if front is None else 1.0
+        heel_mid, heel_off = [0.0, 0.0], [0.0, 0.0]
+        heel_mid[stance] = 12.0  # late stance: the stance heel rises (heel off) …
+        heel_off[stance] = uniform(rng, *HEEL_OFF_DEG)  # … and the foot leaves from its toes (toe off)
+        heel_mid[swing] = heel_off[swing] = -HEEL_STRIKE_DEG * max(short, 0.7)  # the swing foot lands on its heel, toes up
+        tl.add(0.5 * step_dur, m, contacts(stance), stance, turn_rad=0.5 * turn, label=label)
+        tl.add(0.5 * step_dur, end, contacts(stance), stance, turn_rad=0.5 * turn, heel=heel_mid, label=label)
+        # Double support: the body passes onto the landing foot (it carries the pelvis from here), the
+        # trailing knee flexes as its heel rises (pre-swing), so the pelvis stays low between the feet.
+        push = end.copy()
+        push[J["left_knee" if stance == LF else "right_knee"], 0] = PRE_SWING_KNEE_DEG * a
+        tl.add(0.12 * style.tempo, push, FEET, swing, heel=heel_off, label=label)
+        head += turn
+        pos = pos + frac * short * step * np.array([np.sin(head), -np.cos(head)])
+        t_left -= step_dur + 0.12 * style.tempo
+        front, stance = swing, swing
+    if front is not None:  # close the feet
+        _close_feet(tl, front, mid, step_dur, label)
+        stance = front
+    tl.add(0.1, BASE, FEET, stance, label=STANDING)
+    tl.scale_to(seconds - 0.2)
+    tl.add(0.2, BASE, FEET, LF, label=STANDING)
+    return tl
+
+
+HEEL_STRIKE_DEG = 15.0  # toes up at heel strike (the foot is flat by mid-stance)
+CLOSE_STRIKE_DEG = 8.0  # a short closing step lands on its heel too, toes a little up
+PRE_SWING_KNEE_DEG = 35.0  # the trailing knee at toe-off (gait studies: ~35–40°)
+START_HEEL_OFF_DEG = 20.0  # the first step from standing: the swing heel rises while the weight shifts
+START_DS_S = 0.25
+
+
+def _next_spot(rng, pos: np.ndarray, home_radius_m: float, heading0: float, line: bool) -> np.ndarray:
+    """A spot (2,) within home_radius_m of the start and over 0.5 m from pos (the last of 20
+    draws when none is); line: on the line through the start along heading0 + 90°."""
+    for _ in range(20):
+        cand = rng.uniform(-home_radius_m, home_radius_m, 2)
+        if line:
+            cand = np.sign(cand[0]) * max(abs(cand[0]), 0.6 * home_radius_m) * np.array([np.cos(heading0), np.sin(heading0)])
+        if np.linalg.norm(cand) <= home_radius_m and np.linalg.norm(cand - pos) > 0.5:
+            break
+    return cand
+
+
+def _close_feet(tl, front, mid, step_dur, label) -> float:
+    """The back foot steps up beside the front one (``front`` stays on the floor): it swings
+    through the mid pose and lands on its heel, then both feet roll flat. Returns the seconds."""
+    swing = LF if front == RF else RF
+    heel_land = [0.0, 0.0]
+    heel_land[swing] = -CLOSE_STRIKE_DEG
+    tl.add(0.5 * step_dur, mid if swing == RF else mirror(mid), contacts(front), front, label=label)
+    tl.add(0.5 * step_dur, BASE, contacts(front), front, heel=heel_land, label=label)
+    tl.add(0.2, BASE, FEET, front, label=label)
+    return step_dur + 0.2
