@@ -108,6 +108,7 @@ def load(path: str | Path | None = None, activities: list[str] | None = None) ->
         raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
 
 
+MAX_COP_STEP_M = 0.4  # a track's centre moving farther between two inferred frames is not one body moving
 MIN_AXIS_AGREEMENT = 0.5  # the feet's axes must agree this well (mean resultant of the doubled angles)
 
 
@@ -266,11 +267,29 @@ class HeadingResolver:
         self.flips = 0  # frames published turned
         self.pending = 0  # frames the model has stood a half turn from the published yaw (confirm_flip_frames)
         self.last_axis_rad = float("nan")  # the feet's axis when last seen (follow_axis)
+        self.last_cop_m: np.ndarray | None = None  # the track's centre when last resolved
+        self.resets = 0  # times the evidence was dropped because the track's centre jumped
+
+    def reset(self) -> None:
+        """Forget the evidence and the published yaw (the track now follows another body, or the same
+        body put down elsewhere): the next frames decide afresh."""
+        self.evidence = np.zeros(2)
+        self.last_yaw, self.pending, self.last_axis_rad = None, 0, float("nan")
 
     def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
-                activity_probs: np.ndarray | None = None) -> np.ndarray:
+                activity_probs: np.ndarray | None = None, cop_m: np.ndarray | None = None) -> np.ndarray:
         """(72,) the model's pose, (H,W) the person's kPa (as the model saw it), (A,) the model's
-        activity probabilities → (72,) the pose to publish."""
+        activity probabilities, (2,) the track's centre on the carpet → (72,) the pose to publish.
+
+        A centre that moved more than MAX_COP_STEP_M since the last resolved frame (no body walks
+        5 m/s; the tracker gave the track to another body, or one was put down elsewhere) drops the
+        evidence: the feet there say nothing of the body that was here."""
+        if cop_m is not None:
+            cop = np.asarray(cop_m, np.float64)[:2]
+            if self.last_cop_m is not None and float(np.hypot(*(cop - self.last_cop_m))) > MAX_COP_STEP_M:
+                self.reset()
+                self.resets += 1
+            self.last_cop_m = cop
         cue, on_feet, axis_rad = frame_evidence(person_kpa, pitch_m, self.params)
         return self.decide(pose_aa, cue, activity_probs, on_feet, axis_rad)
 

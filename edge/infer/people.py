@@ -144,7 +144,8 @@ class PeopleInference:
             kpa = person_pressure_kpa(filled_kpa, person.mask, floor, sat)  # what the model saw
             assert st.heading is not None  # every track has a resolver when resolve_heading is on
             before = st.heading.flips
-            poses.append(st.heading.resolve(out["pose_aa"][i], kpa, self._pitch_m, out["activity_probs"][i]))
+            poses.append(st.heading.resolve(out["pose_aa"][i], kpa, self._pitch_m, out["activity_probs"][i],
+                                            person.cop_raw_m))
             step.work["heading_turned"] += st.heading.flips - before
         return poses
 

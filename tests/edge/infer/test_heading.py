@@ -246,3 +246,21 @@ def test_the_feet_axis_is_their_long_axis_and_none_when_they_disagree():
         assert abs((axis - a + np.pi / 2) % np.pi - np.pi / 2) < 0.05
     crossed = np.maximum(feet_facing(0.0, (0.5, 0.5)), feet_facing(np.pi / 2, (1.3, 1.3)))
     assert np.isnan(heading.frame_evidence(crossed, PITCH, params)[2])
+
+
+def test_a_track_whose_centre_jumps_starts_its_heading_afresh():
+    """The tracker hands a track to a body 1 m away (or the same body is put down elsewhere): the
+    evidence of the feet that were there must not turn the new body's right answer backwards."""
+    params = HeadingParams(decay=0.99, max_evidence=30.0, min_evidence=0.5)
+    r = HeadingResolver(params)
+    for _ in range(40):  # facing +x (toes along +column), evidence saturated
+        r.resolve(upright(cue_yaw_rad(np.array([1.0, 0.0]))), feet_facing(0.0), PITCH, cop_m=(0.9, 0.9))
+    truth = cue_yaw_rad(np.array([-1.0, 0.0]))  # the body now there faces −x
+    out = r.resolve(upright(truth), feet_facing(np.pi, (0.9, 1.6)), PITCH, cop_m=(0.9, 1.6))
+    assert abs((yaw_rad(out[:3]) - truth + np.pi) % (2 * np.pi) - np.pi) < 0.1
+    assert r.resets == 1
+    stay = HeadingResolver(params)  # the same without the jump: the old evidence wins (what the reset avoids)
+    for _ in range(40):
+        stay.resolve(upright(cue_yaw_rad(np.array([1.0, 0.0]))), feet_facing(0.0), PITCH, cop_m=(0.9, 0.9))
+    out = stay.resolve(upright(truth), feet_facing(np.pi, (0.9, 1.6)), PITCH, cop_m=(0.9, 1.0))
+    assert abs((yaw_rad(out[:3]) - truth + np.pi) % (2 * np.pi) - np.pi) > np.pi / 2
