@@ -213,17 +213,10 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
     (``calibration-<carpet>.npz``, see sim.dataset.calibrate), listed in the manifest and named
     by each shard's ``carpet``, so that the board's path (counts → calibration → kPa) can be read
     (export.data.load_tracks(board=True))."""
-    from sim.dataset.calibrate import METHODS
     from sim.motion import ACTIVITIES
     from sim.motion import Subject as MotionSubject
 
-    if not 1 <= people[0] <= people[1] <= 3:
-        raise ValueError(f"people must be a range within 1..3, got {people}")
-    if calibration is not None and calibration not in METHODS:
-        raise ValueError(f"calibration must be one of {METHODS}, got {calibration!r}")
-    unknown = [a for a in activities if a not in ACTIVITIES]
-    if unknown:
-        raise ValueError(f"unknown activities {unknown}; known: {list(ACTIVITIES)}")
+    _check_arguments(people, activities, calibration)
     rng = np.random.default_rng(seed)
     motion_subjects = [MotionSubject.random(i, seed * 1000 + i) for i in range(subjects)]
     splits = split_subjects(subjects, rng)
@@ -237,58 +230,77 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
                                      "calibration": calibration})
     os.environ["OMP_NUM_THREADS"] = os.environ["OPENBLAS_NUM_THREADS"] = "1"  # BLAS threads fight on 2 cores (workers inherit)
     jobs = [(p, motion_subjects, settings) for p in plans]
-    t0, done, frames = time.monotonic(), 0, 0
-    results: dict[int, dict[str, np.ndarray]] = {}
-    next_index = 0
-
-    def flush() -> None:  # write shards in plan order, whatever order workers finish in
-        nonlocal next_index
-        while next_index in results:
-            arrays = results.pop(next_index)
-            plan = plans[next_index]
-            if arrays is None:
-                writer.manifest.setdefault("skipped_scenes", []).append(
-                    {"subjects": list(plan.subjects), "activities": [list(a) for a in plan.activities]})
-            else:
-                writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed,
-                                            "people": len(plan.subjects), "carpet": plan.carpet_seed})
-            next_index += 1
-
-    def report(arrays: dict[str, np.ndarray] | None) -> None:
-        nonlocal done, frames
-        done += 1
-        frames += 0 if arrays is None else len(arrays["counts"])
-        if progress:
-            el = time.monotonic() - t0
-            eta = el / done * (len(plans) - done)
-            bar = "#" * int(30 * done / len(plans))
-            print(f"\r[{bar:<30}] {done}/{len(plans)} sequences, {frames} frames, {frames / el:.0f} frames/s, ETA {eta:.0f} s",
-                  end="", file=sys.stderr, flush=True)
-
+    shards = _InPlanOrder(writer, plans, progress)
     carpets = sorted({p.carpet_seed for p in plans}) if calibration else []
     cal_jobs = [(c, grid, adc_bits, pitch_mm, calibration) for c in carpets]
     if workers <= 1:
         calibrations = [_calibrate(job) for job in cal_jobs]
         for job in jobs:
-            index, arrays = _worker(job)
-            report(arrays)
-            results[index] = arrays
-            flush()
+            shards.put(*_worker(job))
     else:
         with ProcessPoolExecutor(max_workers=workers) as pool:
             calibrations = list(pool.map(_calibrate, cal_jobs))
             for index, arrays in pool.map(_worker, jobs):
-                report(arrays)
-                results[index] = arrays
-                flush()
+                shards.put(index, arrays)
     if calibration:
-        writer.manifest["calibrations"] = {}
-        for c, cal in zip(carpets, calibrations):
-            name = f"calibration-{c}.npz"
-            digest = cal.save(Path(out_dir) / name)
-            writer.manifest["calibrations"][str(c)] = {"file": name, "method": calibration, "sha256": digest,
-                                                       "validation_ok": cal.validation.get("ok")}
+        _list_calibrations(writer, Path(out_dir), carpets, calibrations, calibration)
     writer.close()
     if progress:
         print(file=sys.stderr)
     return Path(out_dir)
+
+
+def _check_arguments(people: tuple[int, int], activities: tuple[str, ...], calibration: str | None) -> None:
+    from sim.dataset.calibrate import METHODS
+    from sim.motion import ACTIVITIES
+
+    if not 1 <= people[0] <= people[1] <= 3:
+        raise ValueError(f"people must be a range within 1..3, got {people}")
+    if calibration is not None and calibration not in METHODS:
+        raise ValueError(f"calibration must be one of {METHODS}, got {calibration!r}")
+    unknown = [a for a in activities if a not in ACTIVITIES]
+    if unknown:
+        raise ValueError(f"unknown activities {unknown}; known: {list(ACTIVITIES)}")
+
+
+class _InPlanOrder:
+    """Writes the shards in plan order, whatever order the workers finish in, and reports progress."""
+
+    def __init__(self, writer: DatasetWriter, plans: list, progress: bool) -> None:
+        self.writer, self.plans, self.progress = writer, plans, progress
+        self.t0, self.done, self.frames, self.next_index = time.monotonic(), 0, 0, 0
+        self.results: dict[int, dict[str, np.ndarray] | None] = {}
+
+    def put(self, index: int, arrays: dict[str, np.ndarray] | None) -> None:
+        self._report(arrays)
+        self.results[index] = arrays
+        while self.next_index in self.results:
+            arrays = self.results.pop(self.next_index)
+            plan = self.plans[self.next_index]
+            if arrays is None:
+                self.writer.manifest.setdefault("skipped_scenes", []).append(
+                    {"subjects": list(plan.subjects), "activities": [list(a) for a in plan.activities]})
+            else:
+                self.writer.write_shard(arrays, {"split": plan.split, "subjects": list(plan.subjects), "seed": plan.seed,
+                                                 "people": len(plan.subjects), "carpet": plan.carpet_seed})
+            self.next_index += 1
+
+    def _report(self, arrays: dict[str, np.ndarray] | None) -> None:
+        self.done += 1
+        self.frames += 0 if arrays is None else len(arrays["counts"])
+        if self.progress:
+            el = time.monotonic() - self.t0
+            eta = el / self.done * (len(self.plans) - self.done)
+            bar = "#" * int(30 * self.done / len(self.plans))
+            print(f"\r[{bar:<30}] {self.done}/{len(self.plans)} sequences, {self.frames} frames, "
+                  f"{self.frames / el:.0f} frames/s, ETA {eta:.0f} s", end="", file=sys.stderr, flush=True)
+
+
+def _list_calibrations(writer: DatasetWriter, out_dir: Path, carpets: list, calibrations: list, method: str) -> None:
+    """Save each carpet's calibration beside the shards and list it (file, method, hash) in the manifest."""
+    writer.manifest["calibrations"] = {}
+    for c, cal in zip(carpets, calibrations):
+        name = f"calibration-{c}.npz"
+        digest = cal.save(out_dir / name)
+        writer.manifest["calibrations"][str(c)] = {"file": name, "method": method, "sha256": digest,
+                                                   "validation_ok": cal.validation.get("ok")}
