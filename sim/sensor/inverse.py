@@ -89,52 +89,15 @@ def true_pressure_estimate(counts: np.ndarray, params: SensorParams, state: Fram
     a_unknown = (c.leak * c.line_factor)[unknown]
 
     rho = cfg.crosstalk.line_resistance_ohm * cfg.crosstalk.g_full_s
-    shorts = [(s.row, s.col, s.g_short_s / cfg.crosstalk.g_full_s) for s in cfg.faults.shorts]
-    converged = True
-    b = a_app.copy()
-    b[unknown] = a_unknown
-    if rho > 0 or shorts:
-        converged = False
-        for _ in range(max_iter):
-            rs, cs = line_sums(b, shorts)
-            nb = a_app * ((1.0 + rho * rs)[:, None] * (1.0 + rho * cs)[None, :])
-            nb[unknown] = a_unknown
-            delta = np.max(np.abs(nb - b))
-            b = nb
-            if delta <= tol * max(1.0, float(np.max(b))):
-                converged = True
-                break
+    b, converged = _undo_line_loading(a_app, unknown, a_unknown, params, max_iter, tol)
     a = b
     if cfg.crosstalk.readout == "floating":
-        # b = a + ghosts(a): fixed point a ← b − ghosts(a), damped
-        # the ghost term's slope can exceed 1 (dense presses), so the plain iteration
-        # would oscillate; a damped one converges
-        leak = c.leak * c.line_factor
-        a = b.copy()
-        ok = False
-        for _ in range(20 * max_iter):
-            na = np.maximum(b - ghosts(np.maximum(a - leak, 0.0), cfg.crosstalk.ghost_strength), 0.0)
-            delta = np.max(np.abs(na - a))
-            a = a + 0.3 * (na - a)
-            if delta <= 1e-11:
-                ok = True
-                break
+        a, ok = _undo_ghosts(b, params, max_iter)
         converged = converged and ok
-
     with np.errstate(invalid="ignore", divide="ignore"):
         film = np.where(c.line_factor > 0, a / np.where(c.line_factor > 0, c.line_factor, 1.0) - c.leak, 0.0)
         uh = film / (c.film_gain * state.temp_factor * state.creep_factor)
-    uh = np.maximum(uh, 0.0)
-    h = cfg.dynamics.hysteresis
-    if h > 0:
-        pk = state.peak
-        # on the unloading branch (uh < pk): 4H/pk·u² − (1+4H)·u + uh = 0, smaller root
-        with np.errstate(invalid="ignore", divide="ignore"):
-            disc = np.maximum((1 + 4 * h) ** 2 - 16 * h * uh / np.where(pk > 0, pk, 1.0), 0.0)
-            u_unload = ((1 + 4 * h) - np.sqrt(disc)) * pk / (8 * h)
-        u = np.where((pk > 0) & (uh < pk), u_unload, uh)
-    else:
-        u = uh
+    u = _undo_hysteresis(np.maximum(uh, 0.0), state.peak, cfg.dynamics.hysteresis)
     p = hill_inverse(u, cfg.response.half_scale_kpa, cfg.response.exponent)
     p = np.where(measurable, p, np.nan)
 
@@ -151,6 +114,54 @@ def true_pressure_estimate(counts: np.ndarray, params: SensorParams, state: Fram
         exact &= ~bad.any(axis=1)[:, None] & ~bad.any(axis=0)[None, :]
     return InverseResult(pressure_kpa=p, saturated=saturated & measurable, measurable=measurable, exact=exact,
                          converged=converged)
+
+
+def _undo_line_loading(a_app: np.ndarray, unknown: np.ndarray, a_unknown: np.ndarray, params: SensorParams,
+                       max_iter: int, tol: float) -> tuple[np.ndarray, bool]:
+    """Apparent → true line-loaded activations (crosstalk through line resistance and shorted crossings):
+    the fixed point b = a_app·(1 + ρ·row sums)(1 + ρ·column sums); → (b, converged)."""
+    cfg = params.config
+    rho = cfg.crosstalk.line_resistance_ohm * cfg.crosstalk.g_full_s
+    shorts = [(s.row, s.col, s.g_short_s / cfg.crosstalk.g_full_s) for s in cfg.faults.shorts]
+    b = a_app.copy()
+    b[unknown] = a_unknown
+    if not (rho > 0 or shorts):
+        return b, True
+    for _ in range(max_iter):
+        rs, cs = line_sums(b, shorts)
+        nb = a_app * ((1.0 + rho * rs)[:, None] * (1.0 + rho * cs)[None, :])
+        nb[unknown] = a_unknown
+        delta = np.max(np.abs(nb - b))
+        b = nb
+        if delta <= tol * max(1.0, float(np.max(b))):
+            return b, True
+    return b, False
+
+
+def _undo_ghosts(b: np.ndarray, params: SensorParams, max_iter: int) -> tuple[np.ndarray, bool]:
+    """A floating readout's ghosts: b = a + ghosts(a), solved by the fixed point a ← b − ghosts(a), damped
+    (the ghost term's slope can exceed 1 under dense presses, so the plain iteration would oscillate)."""
+    c, cfg = params.carpet, params.config
+    leak = c.leak * c.line_factor
+    a = b.copy()
+    for _ in range(20 * max_iter):
+        na = np.maximum(b - ghosts(np.maximum(a - leak, 0.0), cfg.crosstalk.ghost_strength), 0.0)
+        delta = np.max(np.abs(na - a))
+        a = a + 0.3 * (na - a)
+        if delta <= 1e-11:
+            return a, True
+    return a, False
+
+
+def _undo_hysteresis(uh: np.ndarray, peak: np.ndarray, h: float) -> np.ndarray:
+    """The film's response with hysteresis ``h`` → the loading-branch response: on the unloading branch
+    (uh < peak) the smaller root of 4H/peak·u² − (1+4H)·u + uh = 0."""
+    if h <= 0:
+        return uh
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = np.maximum((1 + 4 * h) ** 2 - 16 * h * uh / np.where(peak > 0, peak, 1.0), 0.0)
+        u_unload = ((1 + 4 * h) - np.sqrt(disc)) * peak / (8 * h)
+    return np.where((peak > 0) & (uh < peak), u_unload, uh)
 
 
 __all__ = ["InverseResult", "initial_state", "true_pressure_estimate", "unsmear"]
