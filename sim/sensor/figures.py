@@ -47,6 +47,14 @@ def main(out_dir: str = "docs/sim/sensor") -> None:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cfg = SensorConfig(frontend=FrontEndConfig(adc_bits=10, sign=1))
+    p = _empty_and_loaded(plt, out, cfg)
+    _faults(plt, out, cfg, p)
+    _crosstalk(plt, out, cfg)
+    print(f"wrote {sorted(x.name for x in out.glob('*.png'))} to {out}")
+
+
+def _empty_and_loaded(plt, out: Path, cfg: SensorConfig) -> np.ndarray:
+    """empty.png (an empty frame, its temporal noise, its histogram) and loaded.png (two feet); → their pressure."""
     sensor = CarpetSensor(cfg, seed=7)
     pitch = cfg.grid.pitch_mm
     empty = sensor.counts(np.zeros(sensor.shape), 0.0)
@@ -81,7 +89,11 @@ def main(out_dir: str = "docs/sim/sensor") -> None:
     fig.tight_layout()
     fig.savefig(out / "loaded.png", dpi=80)
     plt.close(fig)
+    return p
 
+
+def _faults(plt, out: Path, cfg: SensorConfig, p: np.ndarray) -> None:
+    """faults.png: every fault mask of a demo carpet, and its counts under the feet and two strips."""
     faulty = CarpetSensor(SensorConfig(faults=demo_faults(cfg.grid.shape)), seed=7)
     masks = faulty.fault_masks
     walk = p.copy()
@@ -94,14 +106,17 @@ def main(out_dir: str = "docs/sim/sensor") -> None:
     for a_, k in zip(ax.ravel(), kinds):
         a_.imshow(masks[k], cmap="gray_r", vmin=0, vmax=1)
         a_.set_title(f"mask: {k} ({masks[k].sum()})")
-    im = ax[1, 3].imshow(walk, cmap="inferno")
+    ax[1, 3].imshow(walk, cmap="inferno")
     ax[1, 3].set_title("pressure (feet + two strips, 6 kPa)")
-    im = ax[1, 4].imshow(fc, cmap="viridis", vmin=0, vmax=1023)
+    ax[1, 4].imshow(fc, cmap="viridis", vmin=0, vmax=1023)
     ax[1, 4].set_title("counts of the faulty carpet")
     fig.tight_layout()
     fig.savefig(out / "faults.png", dpi=70)
     plt.close(fig)
 
+
+def _crosstalk(plt, out: Path, cfg: SensorConfig) -> None:
+    """crosstalk.png: a floating readout's ghost, and line resistance reading shared rows low."""
     ghost_cfg = SensorConfig(frontend=FrontEndConfig(adc_bits=10), crosstalk=cfg.crosstalk.__class__(readout="floating"))
     gs = CarpetSensor(ghost_cfg.ideal(), seed=7)
     q = np.zeros(gs.shape)
@@ -126,7 +141,6 @@ def main(out_dir: str = "docs/sim/sensor") -> None:
     fig.tight_layout()
     fig.savefig(out / "crosstalk.png", dpi=80)
     plt.close(fig)
-    print(f"wrote {sorted(x.name for x in out.glob('*.png'))} to {out}")
 
 
 if __name__ == "__main__":
