@@ -108,6 +108,35 @@ class _Frame:
     sent: list = dataclasses.field(default_factory=list)  # packets, for duplicate_next_frame
 
 
+def _check_settings(rows: int, cols: int, tile_rows: int | None, tile_cols: int | None, adc_bits: int,
+                    packing: str | int, sign: int, device_id: str, fw_version: tuple[int, int, int]) -> tuple[str, int, int]:
+    """Every physical setting checked, with the accepted values in the error → (packing name, tile rows, tile cols)."""
+    if rows < 1 or cols < 1 or rows > 0xFFFF or cols > 0xFFFF:
+        raise ValueError(f"rows and cols must be 1..65535; got {rows}x{cols}")
+    if adc_bits not in ADC_BITS:
+        raise ValueError(f"adc_bits must be one of {ADC_BITS}; got {adc_bits}")
+    packing_name = codec.PACKING_NAMES.get(packing, packing) if isinstance(packing, int) else packing
+    if packing_name not in _PACKING_MAX_BITS:
+        raise ValueError(f"packing must be one of {sorted(codec.PACKING)} (or its code); got {packing!r}")
+    if adc_bits > _PACKING_MAX_BITS[packing_name]:
+        raise ValueError(f"packing {packing_name} holds at most {_PACKING_MAX_BITS[packing_name]} bits; adc_bits={adc_bits}")
+    if sign not in (-1, 1):
+        raise ValueError(f"sign must be -1 (pressure lowers the reading) or +1 (raises it); got {sign}")
+    tile_rows = tile_rows if tile_rows is not None else (rows // 32 if rows % 32 == 0 else 1)
+    tile_cols = tile_cols if tile_cols is not None else (cols // 32 if cols % 32 == 0 else 1)
+    if not (1 <= tile_rows <= 255 and 1 <= tile_cols <= 255) or rows % tile_rows or cols % tile_cols:
+        raise ValueError(f"tiles {tile_rows}x{tile_cols} must be 1..255 and divide the grid {rows}x{cols}")
+    try:
+        device_id.encode("ascii")
+    except UnicodeEncodeError:
+        raise ValueError(f"device_id must be ASCII; got {device_id!r}") from None
+    if not 1 <= len(device_id) <= 16:
+        raise ValueError(f"device_id must be 1..16 ASCII characters; got {device_id!r}")
+    if len(fw_version) != 3 or not all(0 <= v <= 255 for v in fw_version):
+        raise ValueError(f"fw_version must be (major, minor, patch), each 0..255; got {fw_version!r}")
+    return str(packing_name), tile_rows, tile_cols
+
+
 class VirtualBoard:
     """The device side of the carpet protocol (see the module docstring)."""
 
@@ -153,29 +182,8 @@ class VirtualBoard:
         hash), to test that a host refuses it loudly.
         """
         self._lock = threading.RLock()
-        if rows < 1 or cols < 1 or rows > 0xFFFF or cols > 0xFFFF:
-            raise ValueError(f"rows and cols must be 1..65535; got {rows}x{cols}")
-        if adc_bits not in ADC_BITS:
-            raise ValueError(f"adc_bits must be one of {ADC_BITS}; got {adc_bits}")
-        packing_name = codec.PACKING_NAMES.get(packing, packing) if isinstance(packing, int) else packing
-        if packing_name not in _PACKING_MAX_BITS:
-            raise ValueError(f"packing must be one of {sorted(codec.PACKING)} (or its code); got {packing!r}")
-        if adc_bits > _PACKING_MAX_BITS[packing_name]:
-            raise ValueError(f"packing {packing_name} holds at most {_PACKING_MAX_BITS[packing_name]} bits; adc_bits={adc_bits}")
-        if sign not in (-1, 1):
-            raise ValueError(f"sign must be -1 (pressure lowers the reading) or +1 (raises it); got {sign}")
-        tile_rows = tile_rows if tile_rows is not None else (rows // 32 if rows % 32 == 0 else 1)
-        tile_cols = tile_cols if tile_cols is not None else (cols // 32 if cols % 32 == 0 else 1)
-        if not (1 <= tile_rows <= 255 and 1 <= tile_cols <= 255) or rows % tile_rows or cols % tile_cols:
-            raise ValueError(f"tiles {tile_rows}x{tile_cols} must be 1..255 and divide the grid {rows}x{cols}")
-        try:
-            device_id.encode("ascii")
-        except UnicodeEncodeError:
-            raise ValueError(f"device_id must be ASCII; got {device_id!r}") from None
-        if not 1 <= len(device_id) <= 16:
-            raise ValueError(f"device_id must be 1..16 ASCII characters; got {device_id!r}")
-        if len(fw_version) != 3 or not all(0 <= v <= 255 for v in fw_version):
-            raise ValueError(f"fw_version must be (major, minor, patch), each 0..255; got {fw_version!r}")
+        packing_name, tile_rows, tile_cols = _check_settings(rows, cols, tile_rows, tile_cols, adc_bits, packing, sign,
+                                                             device_id, fw_version)
         self.rows, self.cols = rows, cols
         self.tile_rows, self.tile_cols = tile_rows, tile_cols
         self.adc_bits = adc_bits
@@ -206,21 +214,28 @@ class VirtualBoard:
         self._frames = frames if frames is not None else self._default_frames
         self._full_scale = (1 << adc_bits) - 1
 
-        row_bytes = 18 + codec.packed_size(cols, self.packing)
+        self._set_rates(rate_hz, max_rate_hz)
+        self._init_link(seed)
+        self._power_off()
+
+    def _set_rates(self, rate_hz: float, max_rate_hz: float) -> None:
+        """The wire size of a frame and the fastest rate the scan, the link and ``max_rate_hz`` allow."""
+        row_bytes = 18 + codec.packed_size(self.cols, self.packing)
         if row_bytes > codec.SPEC.max_packet_bytes:
-            raise ValueError(f"a ROW of {cols} samples in {packing_name} takes {row_bytes} bytes "
+            raise ValueError(f"a ROW of {self.cols} samples in {self.packing_name} takes {row_bytes} bytes "
                              f"> max_packet_bytes={codec.SPEC.max_packet_bytes}")
-        self.frame_wire_bytes = rows * _wire_len(row_bytes) + _wire_len(23)
-        self.scan_time_s = rows * self.row_time_us * 1e-6
+        self.frame_wire_bytes = self.rows * _wire_len(row_bytes) + _wire_len(23)
+        self.scan_time_s = self.rows * self.row_time_us * 1e-6
         limits = [max_rate_hz, 1.0 / self.scan_time_s]
-        if link_bytes_per_s:
-            limits.append(link_bytes_per_s / self.frame_wire_bytes)
+        if self.link_bytes_per_s:
+            limits.append(self.link_bytes_per_s / self.frame_wire_bytes)
         self.max_rate_hz = min(limits)
         self.default_rate_mhz = int(round(rate_hz * 1000))
         if not self._rate_ok(self.default_rate_mhz):
             raise ValueError(f"rate_hz={rate_hz} is outside {self.min_rate_hz}..{self.max_rate_hz:.3f} Hz for this board")
 
-        # Link state, survives a power cycle.
+    def _init_link(self, seed: int) -> None:
+        """Link state and fault injection; survives a power cycle."""
         self._now: float | None = None
         self._plugged = True
         self.plug_generation = 0
@@ -233,7 +248,6 @@ class VirtualBoard:
         self._skip_next = 0
         self.injected: Counter = Counter()  # what was actually applied, see the module docstring
         self.sent: Counter = Counter()  # packets by name, "frames", "bytes" (handed out by read)
-        self._power_off()
 
     # ------------------------------------------------------------------ public: time and I/O
 
