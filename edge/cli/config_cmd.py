@@ -63,7 +63,8 @@ def validate(args: argparse.Namespace) -> int:
 
 
 def show(args: argparse.Namespace) -> int:
-    from edge.runtime.config import RuntimeConfig, describe, section_docs, to_toml
+    from edge.runtime.config import RuntimeConfig
+    from edge.runtime.config_docs import describe, section_docs, to_toml, toml_value
 
     cfg = _load(args.file) if args.file else RuntimeConfig()
     if args.toml:
@@ -81,8 +82,6 @@ def show(args: argparse.Namespace) -> int:
             node = cfg.to_dict()
             for part in row.key.split("."):
                 node = node.get(part, {}) if isinstance(node, dict) else {}
-            from edge.runtime.config import toml_value
-
             value = "(unset)" if node == {} else toml_value(node)
         print(f"  {row.key} ({row.type}) = {value}")
         print(textwrap.fill(row.doc, 100, initial_indent="      ", subsequent_indent="      "))

@@ -29,7 +29,7 @@ def make_calibration(created: str | None = None, grid: int = 96, **device: Any):
 
 
 def write_config(path: Path, values: dict[str, dict[str, Any]]) -> Path:
-    from edge.runtime.config import toml_value
+    from edge.runtime.config_docs import toml_value
 
     lines = []
     for section, table in values.items():

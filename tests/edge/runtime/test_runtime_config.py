@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 
 from edge.cli import main
-from edge.runtime.config import ConfigError, RuntimeConfig, default_bundle_path, describe, load_config, to_toml
+from edge.runtime.config import ConfigError, RuntimeConfig, default_bundle_path, load_config
+from edge.runtime.config_docs import describe, to_toml
 
 REPO = Path(__file__).resolve().parents[3]
 EXAMPLE = REPO / "deploy" / "cavatar.example.toml"
