@@ -62,8 +62,10 @@ from sim.contact.mesh import (
     subject_mass_kg,
     tissue_stiffness,
 )
-from sim.contact.model import G_M_S2, ContactModel, ContactResult, SceneResult, sampling_kernel
+from sim.contact.model import G_M_S2, ContactModel
 from sim.contact.raster import LowestSurface, lowest_surface
+from sim.contact.result import ContactResult, SceneResult
+from sim.contact.sampling import sampling_kernel
 from sim.contact.tissue import regional_tissue
 
 __all__ = [

@@ -1,81 +1,28 @@
-"""ContactModel: posed body mesh → true pressure per sensel (see the package docstring)."""
+"""ContactModel: posed body mesh → true pressure per sensel (see the package docstring).
+
+The model holds the carpet and the compliant layer; the indentation plane's solve lives in
+``plane``, the rug and sensel sampling in ``sampling``, what it returns in ``result``.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.special import ndtr
 
 from sim.contact.mesh import mesh_centroid_m
-from sim.contact.raster import LowestSurface, lowest_surface
+from sim.contact.plane import solve_plane
+from sim.contact.raster import lowest_surface
+from sim.contact.result import ContactResult, SceneResult
+from sim.contact.sampling import sample_sensels, sampling_kernel
 
 G_M_S2 = 9.81
-_SQRT_2PI = math.sqrt(2.0 * math.pi)
 
 
-def _ramp2(t, sigma):
-    """Second antiderivative of the unit Gaussian of width sigma (a ramp when sigma = 0)."""
-    if sigma <= 0:
-        return np.maximum(t, 0.0)
-    u = t / sigma
-    return t * ndtr(u) + sigma * np.exp(-0.5 * u * u) / _SQRT_2PI
-
-
-def sampling_kernel(n_sensels: int, pitch_m: float, cell_m: float, pad: int, sigma_m: float, width_m: float) -> np.ndarray:
-    """(n_sensels, n_cells) weights: mean over a crossing window of width ``width_m``
-    centred on each sensel of the fine pressure (cells uniform) blurred by a Gaussian
-    of ``sigma_m``. Column k is lattice cell k − pad. Exact (closed-form double integral)."""
-    centres = (np.arange(n_sensels) + 0.5) * pitch_m
-    a = (centres - width_m / 2)[:, None]
-    b = (centres + width_m / 2)[:, None]
-    lo = ((np.arange(int(round(n_sensels * pitch_m / cell_m)) + 2 * pad) - pad) * cell_m)[None, :]
-    hi = lo + cell_m
-    w = _ramp2(b - lo, sigma_m) - _ramp2(b - hi, sigma_m) - _ramp2(a - lo, sigma_m) + _ramp2(a - hi, sigma_m)
-    w /= width_m  # mean over the window; a cell's pressure acts over its whole width
-    w[w < 1e-9 * w.max()] = 0.0
-    return w
-
-
-@dataclass
-class ContactResult:
-    """One person's contact with the carpet (one frame)."""
-
-    pressure_kpa: np.ndarray  # (H, W) float32: true pressure sampled at the sensels
-    contact_mask: np.ndarray  # (H, W) bool: pressure_kpa > the model's contact threshold
-    force_n: float  # vertical force landing on the carpet (fine grid)
-    force_total_n: float  # vertical force the body exerts in all (on + off the carpet)
-    target_force_n: float  # m·(g + a_z), what force_total_n was solved to
-    force_off_carpet_n: float  # lost beyond the carpet's edges
-    cop_m: np.ndarray  # (2,) centre of pressure of the on-carpet force (NaN if none)
-    cop_total_m: np.ndarray  # (2,) centre of pressure of the whole force (NaN if none)
-    target_cop_m: np.ndarray | None  # (2,) where the COP was made to be (None: free)
-    com_m: np.ndarray  # (3,) centre of mass used
-    mass_kg: float
-    balanced: bool  # COP reached the target (or no target asked); False: see cop_error_m
-    cop_error_m: float  # |cop_total − target_cop| (0 when no target)
-    airborne: bool  # lowest point above the floor by more than max_gap, or target ≤ 0
-    indentation_mm: float  # deepest penetration into the compliant layer
-    slope: np.ndarray  # (2,) tilt of the indentation plane (dz/dx, dz/dy)
-    contact_area_m2: float  # fine-grid contact area (whole body, also off the carpet)
-    sensel_force_n: float  # Σ pressure_kpa·pitch²: what perfect sensels would sum to
-    iterations: int
-    fine_pressure_kpa: np.ndarray | None = None  # (ny, nx) with keep_fine=True
-    fine_origin: tuple[int, int] | None = None  # lattice index (j0, i0) of fine[0, 0]
-    fine_cell_m: float | None = None
-    info: dict = field(default_factory=dict)
-
-    @property
-    def off_carpet_fraction(self) -> float:
-        return self.force_off_carpet_n / self.force_total_n if self.force_total_n > 0 else 0.0
-
-
-@dataclass
-class SceneResult:
-    pressure_kpa: np.ndarray  # (H, W) float32, the sum of everyone's field
-    person_index: np.ndarray  # (H, W) int8: whose pressure dominates a contact sensel, −1 none
-    people: list  # the ContactResult of each person
+def _cop(force_n, x_m, y_m):
+    """(2,) centre of pressure of per-cell forces at cell centres (x_m, y_m); NaN when no force."""
+    s = force_n.sum()
+    return np.array([force_n @ x_m / s, force_n @ y_m / s]) if s > 0 else np.array([np.nan, np.nan])
 
 
 class ContactModel:
@@ -193,7 +140,7 @@ class ContactModel:
             surf = lowest_surface(v, faces, 1.0 / k_vertex, z_max, self.cell_m, faces_t=self._faces_t(faces))
             if surf.empty:
                 return self._empty(com, mass_kg, target_f, target_cop, airborne=True)
-            sol = self._solve(surf, zmin, z_max, target_f, target_cop)
+            sol = solve_plane(surf, zmin, z_max, target_f, target_cop, self.exponent, self.cell_m, self.max_slope)
             if not sol["balanced"] and z_max - zmin < self.max_band_m:
                 # Support may lie higher than the band (a foot or hand a few cm up): widen it.
                 z_max = zmin + min(2.0 * (z_max - zmin), self.max_band_m)
@@ -238,95 +185,8 @@ class ContactModel:
             raise ValueError("tissue stiffness must be positive and finite")
         return 1.0 / (1.0 / k + 1.0 / self.rug_kpa_per_mm)  # tissue and rug in series
 
-    def _solve(self, surf: LowestSurface, zmin: float, z_max: float, target_f: float, target_cop):
-        """Indentation plane z = zmin + h + sx·(x−tx) + sy·(y−ty): solve h (and the
-        slopes when a COP target is set) so that Σ p·A = target_f and the moments about
-        the target vanish. Newton on the convex potential Σ K·d^(n+1)/(n+1) − F·h."""
-        xs, ys = surf.centres()
-        jj, ii = np.nonzero(surf.z_m < z_max)  # surface above the band is checked after the solve
-        z = surf.z_m[jj, ii] - zmin
-        n = self.exponent
-        # force per cell in N for d in metres: K·d^n, K = k[kPa/mm]·1e3·(1e3)^n·A
-        kk = 1e3 * (1e3 ** n) * self.cell_m ** 2 / np.maximum(surf.attr[jj, ii], 1e-12)
-        ref = target_cop if target_cop is not None else np.array([xs.mean(), ys.mean()])
-        dx, dy = xs[ii] - ref[0], ys[jj] - ref[1]
-        h = self._solve_height(z, kk, target_f)
-        theta = np.array([h, 0.0, 0.0])
-        balanced, its = True, 0
-        if target_cop is not None:
-            u = np.stack([np.ones_like(dx), dx, dy])  # (3, N)
-
-            def state(t):
-                d = np.maximum(t[0] + t[1] * dx + t[2] * dy - z, 0.0)
-                q = kk * (d ** n if n != 1.0 else d)
-                phi = float((q @ d) / (n + 1) - target_f * t[0])
-                return d, q, phi
-
-            d, q, phi = state(theta)
-            free = np.ones(3, bool)  # the slopes leave the set when they reach ±max_slope
-            balanced = False
-            tol = 1e-5 * target_f  # force within 1e-5, moments within 10 µm × force
-            for its in range(1, 120):
-                grad = u @ q - np.array([target_f, 0.0, 0.0])
-                # a slope held at its bound is released when the potential wants it back inside
-                for k in (1, 2):
-                    if not free[k] and grad[k] * np.sign(theta[k]) > 0:
-                        free[k] = True
-                if (np.abs(grad[free]) < tol).all():
-                    balanced = bool(free.all())
-                    break
-                w = kk * n * (d ** (n - 1) if n != 1.0 else (d > 0))
-                hess = (u * w) @ u.T + np.diag([1e-9, 1e-9, 1e-9]) * max(w.sum(), 1.0)
-                step = np.zeros(3)
-                step[free] = -np.linalg.solve(hess[np.ix_(free, free)], grad[free])
-                big = np.abs(step[1:]).max()
-                if big > 0.05:  # trust region on the tilt: new support enters gradually
-                    step *= 0.05 / big
-                alpha = 1.0
-                for _ in range(30):  # backtracking on the convex potential
-                    cand = theta + alpha * step
-                    cs = state(cand)
-                    if cs[2] <= phi + 1e-4 * alpha * float(grad @ step):
-                        break
-                    alpha *= 0.5
-                for k in (1, 2):  # the tilt is bounded: beyond it the COM is outside the support
-                    if abs(cand[k]) > self.max_slope:
-                        cand[k] = np.sign(cand[k]) * self.max_slope
-                        free[k] = False
-                theta = cand
-                d, q, phi = state(theta)
-            if not free.all() or not balanced:
-                # Closest to balance within the tilt bound: force exact, the COP as near as it gets.
-                theta[0] = self._solve_height(z - theta[1] * dx - theta[2] * dy, kk, target_f)
-                balanced = False
-        return {"h": float(theta[0]), "sx": float(theta[1]), "sy": float(theta[2]), "ref": np.asarray(ref, float),
-                "balanced": balanced, "iterations": its, "cells": (jj, ii, z, kk, dx, dy)}
-
-    def _solve_height(self, z, kk, target_f):
-        """The uniform indentation alone (no tilt): F(h) = Σ K·max(h − z, 0)^n = target."""
-        n = self.exponent
-        order = np.argsort(z)
-        zs, ks = z[order], kk[order]
-        if n == 1.0:  # piecewise linear: exact from cumulative sums at the breakpoints
-            ck, ckz = np.cumsum(ks), np.cumsum(ks * zs)
-            f_at = ck * zs - ckz  # force with h at each breakpoint (cells before it in contact)
-            m = int(np.searchsorted(f_at, target_f))  # cells 0..m-1 in contact
-            m = max(1, min(m, zs.size))
-            return float((target_f + ckz[m - 1]) / ck[m - 1])
-        lo, hi = float(zs[0]), float(zs[0]) + 0.01
-        while (ks * np.maximum(hi - zs, 0) ** n).sum() < target_f:
-            lo, hi = hi, hi + 2 * (hi - zs[0])
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if (ks * np.maximum(mid - zs, 0) ** n).sum() < target_f:
-                lo = mid
-            else:
-                hi = mid
-            if hi - lo < 1e-9:
-                break
-        return 0.5 * (lo + hi)
-
     def _finish(self, surf, sol, com, mass_kg, target_f, target_cop, keep_fine):
+        """The solved plane's field: cell forces, cropped fine field, COPs, sensels → ContactResult."""
         jj, ii, z, kk, dx, dy = sol["cells"]
         d = sol["h"] + sol["sx"] * dx + sol["sy"] * dy - z
         pos = d > 0
@@ -343,31 +203,8 @@ class ContactModel:
         jj, ii = jj - jlo, ii - ilo
         p_kpa = np.zeros((ny, nx))
         p_kpa[jj, ii] = f_cell / (1e3 * area)
-        gj, gi = jj + j0, ii + i0  # lattice indices
-        on = (gj >= 0) & (gj < self._ny_lattice) & (gi >= 0) & (gi < self._nx_lattice)
-        x = (gi + 0.5) * self.cell_m
-        y = (gj + 0.5) * self.cell_m
-        f_total = float(f_cell.sum())
-        f_on = float(f_cell[on].sum())
-
-        def cop(w):
-            s = w.sum()
-            return np.array([w @ x / s, w @ y / s]) if s > 0 else np.array([np.nan, np.nan])
-
-        cop_total = cop(f_cell)
-        cop_on = cop(np.where(on, f_cell, 0.0))
-        # Sensels: blur + crossing window, separable, only lattice columns that can reach a sensel.
-        lo_j, hi_j = max(j0, -self.pad), min(j0 + ny, self._ny_lattice + self.pad)
-        lo_i, hi_i = max(i0, -self.pad), min(i0 + nx, self._nx_lattice + self.pad)
-        sensels = np.zeros((self.rows, self.cols))
-        if lo_j < hi_j and lo_i < hi_i:
-            sub = p_kpa[lo_j - j0:hi_j - j0, lo_i - i0:hi_i - i0]
-            ky = self._ky[:, lo_j + self.pad:hi_j + self.pad]
-            kx = self._kx[:, lo_i + self.pad:hi_i + self.pad]
-            r = np.flatnonzero(ky.any(1))
-            c = np.flatnonzero(kx.any(1))
-            if r.size and c.size:
-                sensels[r[0]:r[-1] + 1, c[0]:c[-1] + 1] = ky[r[0]:r[-1] + 1] @ sub @ kx[c[0]:c[-1] + 1].T
+        f_total, f_on, cop_total, cop_on = self._forces_and_cops(jj + j0, ii + i0, f_cell)
+        sensels = sample_sensels(p_kpa, (j0, i0), self._ky, self._kx, self.pad)
         pressure = sensels.astype(np.float32)
         cop_err = float(np.hypot(*(cop_total - target_cop))) if target_cop is not None else 0.0
         res = ContactResult(
@@ -398,6 +235,15 @@ class ContactModel:
             res.fine_origin = (j0, i0)
             res.fine_cell_m = self.cell_m
         return res
+
+    def _forces_and_cops(self, gj, gi, f_cell):
+        """Total and on-carpet force (N) and their COPs (2,) of cell forces f_cell at lattice cells (gj, gi)."""
+        on = (gj >= 0) & (gj < self._ny_lattice) & (gi >= 0) & (gi < self._nx_lattice)
+        x = (gi + 0.5) * self.cell_m
+        y = (gj + 0.5) * self.cell_m
+        f_total = float(f_cell.sum())
+        f_on = float(f_cell[on].sum())
+        return f_total, f_on, _cop(f_cell, x, y), _cop(np.where(on, f_cell, 0.0), x, y)
 
     def _empty(self, com, mass_kg, target_f, target_cop, airborne):
         shape = (self.rows, self.cols)

@@ -20,27 +20,23 @@ See ``docs/sim-sensor.md`` for the pipeline and every parameter.
 
 from .config import (
     ADC_BITS,
-    FAULT_RATES,
-    RANGES,
     CrosstalkConfig,
     DynamicsConfig,
-    FaultConfig,
     FrontEndConfig,
     GainConfig,
     GridConfig,
-    LineFault,
-    MuxBankFault,
     NoiseConfig,
     ResponseConfig,
     SensorConfig,
     SessionConfig,
-    ShortFault,
     StreamConfig,
     lsb10_to_counts,
 )
+from .fault_config import FaultConfig, LineFault, MuxBankFault, ShortFault
 from .inverse import InverseResult, initial_state, true_pressure_estimate
 from .model import CarpetSensor, FrameState, FrameTruth
 from .params import FAULT_KINDS, CarpetParams, SensorParams, SessionParams, hill, hill_inverse
+from .ranges import FAULT_RATES, RANGES
 from .stream import FrameFlags, FrameStream
 
 __all__ = [

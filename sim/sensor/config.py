@@ -14,19 +14,19 @@ Unit conventions:
 The configuration is split into the three randomisation levels of the note:
 per carpet (:class:`GridConfig`, :class:`ResponseConfig`, :class:`GainConfig`,
 :class:`FrontEndConfig`, :class:`DynamicsConfig`, :class:`CrosstalkConfig`,
-:class:`NoiseConfig`, :class:`FaultConfig`), per session (:class:`SessionConfig`) and
-per frame (noise draws, and :class:`StreamConfig` for the frame stream).
+:class:`NoiseConfig`, and :class:`FaultConfig` from ``fault_config``), per session
+(:class:`SessionConfig`) and per frame (noise draws, and :class:`StreamConfig` for the
+frame stream). The ranges a random carpet is drawn from live in ``ranges``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Literal
 
-import numpy as np
+from .fault_config import FaultConfig
 
 ADC_BITS = (8, 10, 12, 16)
-LineAxis = Literal["row", "col"]
 
 
 def lsb10_to_counts(value_lsb10: float, adc_bits: int) -> float:
@@ -222,78 +222,6 @@ class NoiseConfig:
 
 
 @dataclass(frozen=True)
-class LineFault:
-    """A fault on one row or column line.
-
-    kind:
-      - ``dead``: open thread; the affected sensels carry no current (read the bare
-        offset, invisible on an empty carpet).
-      - ``half_dead``: a high-resistance thread; conductance × ``factor``.
-      - ``stuck``: the line's channel reads the pressure rail (``level='rail'``) or the
-        opposite rail (``level='low'``) whatever the load.
-      - ``noisy``: extra white noise of σ ``noise_lsb10``.
-    ``start``/``stop`` (inclusive/exclusive, along the line) limit the fault to part of
-    the line, e.g. a thread broken at ``start`` is ``dead`` from ``start`` to the end.
-    """
-
-    kind: Literal["dead", "half_dead", "stuck", "noisy"]
-    axis: LineAxis
-    index: int
-    factor: float = 0.25
-    noise_lsb10: float = 12.0
-    level: Literal["rail", "low"] = "rail"
-    start: int = 0
-    stop: int | None = None
-
-    def __post_init__(self) -> None:
-        if self.kind not in ("dead", "half_dead", "stuck", "noisy"):
-            raise ValueError(f"unknown line fault kind {self.kind!r}")
-        if self.axis not in ("row", "col"):
-            raise ValueError(f"axis must be 'row' or 'col', got {self.axis!r}")
-        if not 0 <= self.factor <= 1:
-            raise ValueError("factor must be in [0, 1]")
-
-
-@dataclass(frozen=True)
-class ShortFault:
-    """Row ``row`` and column ``col`` shorted at their crossing.
-
-    The crossing reads the pressure rail; the two lines become one electrical node, so
-    their line loads are shared (pressure anywhere on one depresses readings on the
-    other); the short itself adds a load of ``g_short_s``.
-    """
-
-    row: int
-    col: int
-    g_short_s: float = 2e-4
-
-
-@dataclass(frozen=True)
-class MuxBankFault:
-    """A dead multiplexer bank: ``size`` adjacent lines from ``start`` (8 or 16) carry no
-    current (columns are read through the column mux, rows driven through the row mux)."""
-
-    axis: LineAxis
-    start: int
-    size: int = 16
-
-    def __post_init__(self) -> None:
-        if self.size < 1:
-            raise ValueError("size must be >= 1")
-
-
-@dataclass(frozen=True)
-class FaultConfig:
-    """The carpet's hardware faults, explicit. ``mask`` (rows, cols) bool marks the
-    sensels that exist (a non-rectangular carpet); ``None`` = all."""
-
-    lines: tuple[LineFault, ...] = ()
-    shorts: tuple[ShortFault, ...] = ()
-    mux_banks: tuple[MuxBankFault, ...] = ()
-    mask: np.ndarray | None = field(default=None, compare=False)
-
-
-@dataclass(frozen=True)
 class SessionConfig:
     """What changes from one session (one laying of the carpet / one recording) to the next."""
 
@@ -369,39 +297,3 @@ class SensorConfig:
             session=replace(self.session, temperature_slope_c_per_h=0.0, drift_lsb10_per_h=0.0,
                             tile_drift_sigma_lsb10_per_h=0.0),
         )
-
-
-# Ranges the randomiser draws from: (low, mode, high); triangular around the default.
-RANGES: dict[str, tuple[float, float, float]] = {
-    "half_scale_kpa": (5.0, 8.0, 15.0),
-    "exponent": (0.9, 1.2, 1.5),
-    "p_sat_kpa": (10.0, 14.0, 20.0),
-    "leakage_fraction": (0.0, 0.002, 0.005),
-    "sensel_sigma": (0.05, 0.15, 0.30),
-    "row_sigma": (0.0, 0.05, 0.10),
-    "col_sigma": (0.0, 0.05, 0.10),
-    "smooth_amplitude": (0.10, 0.15, 0.20),
-    "smooth_length_mm": (200.0, 450.0, 800.0),
-    "tile_sigma": (0.0, 0.05, 0.10),
-    "global_offset_lsb10": (-12.0, 10.0, 48.0),
-    "hysteresis": (0.0, 0.05, 0.10),
-    "creep_per_decade": (0.0, 0.03, 0.05),
-    "temp_gain_per_c": (0.0015, 0.0025, 0.0035),
-    "line_resistance_ohm": (20.0, 100.0, 500.0),
-    "white_lsb10": (1.0, 1.5, 2.5),
-    "row_lsb10": (0.3, 0.7, 1.2),
-    "smear_fraction": (0.0, 0.02, 0.04),
-    "temperature_c": (15.0, 22.0, 30.0),
-    "rug_sigma_mm": (0.0, 5.0, 15.0),
-}
-
-# Probability that a randomised carpet has at least one fault of each kind (est.).
-FAULT_RATES: dict[str, float] = {
-    "dead": 0.15,
-    "half_dead": 0.10,
-    "stuck": 0.05,
-    "noisy": 0.10,
-    "short": 0.05,
-    "mux_bank": 0.03,
-    "mask": 0.05,
-}

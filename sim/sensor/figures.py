@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import FaultConfig, FrontEndConfig, LineFault, MuxBankFault, SensorConfig, ShortFault
+from .config import FrontEndConfig, SensorConfig
+from .fault_config import FaultConfig, LineFault, MuxBankFault, ShortFault
 from .model import CarpetSensor
 
 

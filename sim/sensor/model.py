@@ -109,7 +109,7 @@ class CarpetSensor:
 
         ``grid``: 96, 48, 32 (square) or a :class:`GridConfig`. ``adc_bits`` and ``sign``
         default to random (10/12 bit, ±1). ``faults``: True (random, at
-        ``config.FAULT_RATES`` merged with ``fault_rates``), False, or a
+        ``ranges.FAULT_RATES`` merged with ``fault_rates``), False, or a
         :class:`FaultConfig`. Sessions are randomised too (temperature, drift; the rug
         blur only if ``rug``).
         """

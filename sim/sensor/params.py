@@ -14,23 +14,19 @@ import numpy as np
 from scipy import ndimage
 
 from .config import (
-    FAULT_RATES,
-    RANGES,
     CrosstalkConfig,
     DynamicsConfig,
-    FaultConfig,
     FrontEndConfig,
     GainConfig,
     GridConfig,
-    LineFault,
-    MuxBankFault,
     NoiseConfig,
     ResponseConfig,
     SensorConfig,
     SessionConfig,
-    ShortFault,
     lsb10_to_counts,
 )
+from .fault_config import FaultConfig, LineFault, MuxBankFault, ShortFault
+from .ranges import FAULT_RATES, RANGES
 
 FAULT_KINDS = ("dead", "half_dead", "stuck", "noisy", "short", "short_lines", "mux_bank", "outside")
 

@@ -1,43 +1,13 @@
-"""The fall detector on scripted per-frame body features: each fall kind and hard negative, its events."""
+"""The fall detector raises fall and person_down: each fall kind, the delays, its config, the event stage."""
 
 from dataclasses import fields, replace
 
 import numpy as np
 import pytest
+from fall_scripts import FEET, KNEEL, LONG, LYING, RATE, SEATED, body, fall_script, kinds, ob, run
 
 from edge.runtime.events import EventStage
-from edge.scene.falls import BodyFeatures, FallConfig, FallDetector, Observation, body_features
-
-RATE = 14.0
-FEET = dict(force_n=650.0, area_m2=0.035, length_m=0.55)
-LYING = dict(force_n=650.0, area_m2=0.09, length_m=0.75)
-SITTING = dict(force_n=650.0, area_m2=0.058, length_m=0.8)  # ≈ 11 kPa: neither on the feet nor lying
-
-
-def body(ids, xy, **kw):
-    return BodyFeatures(tuple(ids), kw["force_n"], kw["area_m2"], kw["length_m"], np.asarray(xy, float))
-
-
-def run(script, config=None, activities=None):
-    """script: [(seconds, [bodies])] segments → [(type, state, t_s, confidence)]."""
-    det = FallDetector(config or FallConfig())
-    out, t = [], 0.0
-    for seconds, bodies in script:
-        for _ in range(int(round(seconds * RATE))):
-            for e in det.step(t, bodies, activities or {}):
-                out.append((e["type"], e["state"], e["t_s"], e.get("confidence")))
-            t += 1 / RATE
-    return out, det
-
-
-def fall_script(transit_s, lie_s, up=True, shift=(0.0, 0.9), transit=None):
-    a, b = np.array([0.9, 0.4]), np.array([0.9, 0.4]) + shift
-    script = [(3.0, [body([1], a, **FEET)])]
-    script.append((transit_s, transit if transit is not None else []))  # toppling: no settled footprint
-    script.append((lie_s, [body([2], b, **LYING)]))
-    if up:
-        script.append((5.0, [body([2], a, **FEET)]))
-    return script
+from edge.scene.falls import FallConfig, FallDetector, body_features
 
 
 @pytest.mark.parametrize("transit_s", [0.3, 0.7, 1.5])  # forward/backward/sideways falls; a slow collapse
@@ -62,10 +32,6 @@ def test_fall_split_over_two_tracks_still_one_fall():
     assert [(k, s) for k, s, _, _ in ev] == [("fall", "raised")]
 
 
-KNEEL = dict(force_n=200.0, area_m2=0.016, length_m=0.55)  # knees and shins on the board's path read light
-LONG = dict(force_n=650.0, area_m2=0.085, length_m=1.6)  # lying on the side at full length
-
-
 def test_a_slow_collapse_where_they_stood_is_a_fall():
     """The knees give way (a light, kneeling print), then over to the side: the load lies 0.3 m from the feet."""
     a = np.array([0.9, 0.6])
@@ -88,106 +54,9 @@ def test_a_collapse_measured_short_for_one_frame_while_landing_is_still_a_fall()
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
-def test_a_push_up_short_for_its_first_frame_only_is_no_collapse():
-    """Down onto hands and feet and straight into the plank: 1.0 m for the first frame on the floor, then longer
-    every frame. The first frame is an edge, not a dip between longer ones: it touched down short."""
-    a = np.array([0.9, 0.6])
-    script = [(3.0, [body([1], a, **FEET)]), (0.2, [])]
-    script += [(1 / RATE, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=n))]) for n in (1.0, 1.27, 1.58, 1.9)]
-    ev, _ = run(script + [(34.0, [body([2], a + (0.15, 0.25), **dict(LONG, length_m=2.1))])])
-    assert ev == []
-
-
-@pytest.mark.parametrize("case", ["kneel_long", "sit_first", "short", "plank", "still_standing"])
-def test_going_down_in_place_without_collapsing_is_no_fall(case):
-    """In place, but: low for longer before lying (a deliberate lie-down), the body sitting rather than at full
-    length, a push-up (short on hands and feet first, then stretched into the plank), or the feet of someone
-    still standing inside what lies there."""
-    a = np.array([0.9, 0.6])
-    lying = body([1, 2], a + (0.15, 0.25), **LONG)
-    if case == "kneel_long":
-        script = [(3.0, [body([1], a, **FEET)]), (5.0, [body([1], a, **KNEEL)]), (0.1, []), (34.0, [lying])]
-    elif case == "sit_first":
-        script = [(3.0, [body([1], a, **FEET)]), (1.5, [body([1], a + (0, 0.2), **SITTING)]), (34.0, [lying])]
-    elif case == "plank":  # down onto hands and feet, then stretched into a push-up's plank: as long as lying
-        crouch = body([1], a + (0.05, 0.1), force_n=650.0, area_m2=0.057, length_m=0.65)
-        script = [(3.0, [body([1], a, **FEET)]), (0.4, [crouch]), (34.0, [body([1], a + (0.15, 0.25), **LONG)])]
-    elif case == "short":
-        script = [(3.0, [body([1], a, **FEET)]), (0.3, []), (34.0, [body([1, 2], a + (0.15, 0.25), **dict(LONG, length_m=1.1))])]
-    else:  # a bag beside the feet of someone who has stood there all along: a long print, no fall
-        def point(tid, force_n, area_m2, xy):  # an observation whose pressure sits at one point
-            x, y = xy
-            return Observation(tid, force_n, area_m2, np.asarray(xy, float),
-                               force_n * np.array([1.0, x, y, x * x, y * y, x * y]))
-
-        feet, bag = point(1, 650.0, 0.035, a), point(2, 300.0, 0.06, a + (0.8, 0.0))
-        # merged: 950 N on 0.095 m², 1.49 m long, its centre 0.25 m from the feet: in place, at full length
-        det, out, t = FallDetector(), [], 0.0
-        for k in range(int(40 * RATE)):
-            out += [e for e in det.step_observations(t, [feet] if k < 3 * RATE else [feet, bag], {})
-                    if e["state"] == "raised"]
-            t += 1 / RATE
-        assert out == []
-        return
-    ev, _ = run(script)
-    assert ev == []
-
-
-def test_lying_down_slowly_is_no_fall_and_no_person_down():
-    """Kneel, sit, lie back over 7 s (an exercise mat) and stay 40 s."""
-    a = np.array([0.9, 0.4])
-    script = [(3.0, [body([1], a, **FEET)]), (7.0, [body([1], a + (0, 0.4), **SITTING)]),
-              (40.0, [body([1], a + (0, 0.9), **LYING)])]
-    ev, _ = run(script)
-    assert ev == []
-
-
-def sit_ups(a, seconds):
-    """Lying, curling up and back every 2 s: the area and the centre change."""
-    out = []
-    for i in range(int(seconds / 2)):
-        out.append((1.0, [body([2], a + (0, 0.9), **LYING)]))
-        out.append((1.0, [body([2], a + (0, 0.75), force_n=650.0, area_m2=0.065, length_m=0.6)]))
-    return out
-
-
-def test_floor_exercises_never_raise_person_down():
-    """Someone drops fast to the floor for sit-ups (the model says sit_up, the body moves): no person_down."""
-    a = np.array([0.9, 0.4])
-    script = [(3.0, [body([1], a, **FEET)]), (0.5, [])] + sit_ups(a, 40.0)
-    ev, _ = run(script, activities={2: "sit_up"})
-    assert ("person_down", "raised") not in [(k, s) for k, s, _, _ in ev]
-
-
 def test_lying_still_is_a_person_down_whatever_the_model_calls_it():
     ev, _ = run(fall_script(0.5, 34.0, up=False), activities={2: "sit_up"})
     assert ("person_down", "raised") in [(k, s) for k, s, _, _ in ev]
-
-
-def test_sitting_kneeling_and_planks_are_not_on_the_floor():
-    a = np.array([0.9, 0.4])
-    plank = dict(force_n=650.0, area_m2=0.03, length_m=1.3)
-    for pose in (SITTING, plank):
-        ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.3, []), (40.0, [body([1], a + (0, 0.3), **pose)])])
-        assert ev == []
-
-
-def test_a_dropped_bag_or_a_pet_beside_someone_standing_raises_nothing():
-    a = np.array([0.9, 0.4])
-    bag = [(3.0, [body([1], a, **FEET)]), (20.0, [body([1, 2], a + (0.1, 0.05), force_n=800, area_m2=0.12, length_m=1.1)])]
-    assert run(bag)[0] == []
-    # a 30 kg dog trots (four small paws), then lies down where it stands: a big footprint, but the load hardly moved
-    dog = [(3.0, [body([5], a, force_n=290, area_m2=0.01, length_m=0.4)]),
-           (40.0, [body([5], a + (0.1, 0.05), force_n=290, area_m2=0.12, length_m=0.5)])]
-    assert run(dog)[0] == []
-    # a cat (5 kg) is too light to be anyone on the floor, wherever it lies
-    cat = [(3.0, [body([6], a, force_n=49, area_m2=0.004, length_m=0.3)]),
-           (40.0, [body([6], a + (0.6, 0.0), force_n=49, area_m2=0.06, length_m=0.3)])]
-    assert run(cat)[0] == []
-
-
-def kinds(ev):
-    return [(k, s) for k, s, _, _ in ev]
 
 
 def test_a_fall_is_judged_where_the_body_settles_not_where_it_first_touched():
@@ -199,9 +68,6 @@ def test_a_fall_is_judged_where_the_body_settles_not_where_it_first_touched():
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
-SEATED = dict(force_n=110.0, area_m2=0.012, length_m=0.3)  # on a chair beside the carpet: only the feet on it
-
-
 def test_falling_off_a_chair_beside_the_carpet_is_a_fall_wherever_it_lands():
     """Seated 6 s (a light, still footprint), then the whole body on the floor 0.3 m from the feet."""
     a = np.array([0.9, 0.4])
@@ -209,46 +75,6 @@ def test_falling_off_a_chair_beside_the_carpet_is_a_fall_wherever_it_lands():
     ev, _ = run(script)
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
     assert ev[0][2] - 6.5 <= 1.0
-
-
-def test_a_squat_with_a_hand_going_down_then_lying_is_no_fall():
-    """A light footprint (saturated forefeet, a hand) that keeps moving is no one seated: lying down beside it is
-    deliberate, as is the same after a still seat whose load the lying body does not exceed 3.5 times."""
-    a = np.array([0.9, 0.4])
-    squat = [(1 / RATE, [body([1], a + (0, 0.002 * k), force_n=200.0 * (1 + 0.35 * np.sin(2 * np.pi * k / RATE)),
-                              area_m2=0.012, length_m=0.3)]) for k in range(42)]  # weight shifting onto a hand
-    ev, _ = run(squat + [(34.0, [body([2], a + (0, 0.3), force_n=800.0, area_m2=0.09, length_m=0.75)])])
-    assert ev == []
-    heavy_seat = dict(SEATED, force_n=300.0)
-    ev, _ = run([(6.0, [body([1], a, **heavy_seat)]), (0.5, []), (34.0, [body([2], a + (0, 0.3), **LYING)])])
-    assert ev == []
-
-
-def test_a_deep_lunge_is_long_but_not_lying():
-    """Two feet 0.8 m apart print 1.6 m long at ≈ 15 kPa; a body that long lying spreads its weight (≈ 8 kPa)."""
-    a = np.array([0.9, 0.4])
-    lunge = dict(force_n=500.0, area_m2=0.032, length_m=1.65)
-    assert run([(3.0, [body([1], a, **FEET)]), (30.0, [body([1], a + (0, 0.5), **lunge)])])[0] == []
-    long_lying = dict(force_n=280.0, area_m2=0.035, length_m=1.65)
-    ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.5, []), (34.0, [body([2], a + (0, 0.8), **long_lying)])])
-    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
-
-
-def test_a_heavy_dog_trotting_over_and_lying_down_is_not_a_person():
-    """30 kg trots in from 0.7 m away and lies down: 290 N over 0.12 m² (≈ 2.4 kPa) is no adult lying."""
-    a = np.array([0.9, 0.4])
-    trot = [(0.2, [body([5], a + (0.0, 0.1 * k), force_n=290, area_m2=0.01, length_m=0.4)]) for k in range(8)]
-    assert run(trot + [(40.0, [body([5], a + (0.0, 0.8), force_n=290, area_m2=0.12, length_m=0.5)])])[0] == []
-
-
-def ob(tid, force_n, area_m2, xy, length_m):
-    """An observation whose pressure moments give a print length_m long along x (two equal halves)."""
-    x, y = xy
-    h = length_m / 4.0
-    w = force_n / 2.0
-    xs = np.array([x - h, x + h])
-    m = np.array([force_n, w * xs.sum(), force_n * y, w * (xs ** 2).sum(), force_n * y * y, w * xs.sum() * y])
-    return Observation(tid, force_n, area_m2, np.array([x, y], float), m)
 
 
 def test_a_lying_body_seen_as_two_tracks_stays_one_body_and_one_fall():
@@ -360,34 +186,6 @@ def test_body_features_merge_near_tracks_and_measure_the_load():
     assert len(two) == 2 and all(b.length_m < 0.4 for b in two)
 
 
-def test_lying_back_from_sitting_on_the_floor_is_no_fall():
-    """A sit-up's start, squeezed: stand, sit down on the floor (a buttocks-and-feet print that reads like feet,
-    carrying 400 N), lie back. The centre of pressure slides onto the floor (0.05 m a frame) while the seat still
-    carries most of the weight; the body comes to rest 0.5 m from where they stood — far enough for a fall, but
-    nothing was in the air."""
-    a = np.array([0.9, 0.4])
-    seat = dict(force_n=400.0, area_m2=0.033, length_m=0.65)
-    script = [(2.0, [body([1], a, **FEET)]), (0.6, [body([1], a + (0, 0.1), **seat)])]
-    script += [(1 / RATE, [body([1], a + (0, 0.1 + 0.05 * k), **seat)]) for k in range(1, 4)]
-    script += [(1 / RATE, [body([1], a + (0, 0.25 + 0.05 * k), force_n=550.0, area_m2=0.06 + 0.01 * k, length_m=0.8)])
-               for k in range(1, 6)]
-    ev, _ = run(script + [(10.0, [body([1], a + (0, 0.55), force_n=550.0, area_m2=0.1, length_m=1.15)])])
-    assert ev == []
-
-
-def test_a_push_up_from_a_crouch_straight_into_a_long_plank_is_no_fall():
-    """Down onto hands and feet (a crouch that reads like feet, carrying the whole load), then the feet hop back:
-    the plank is 1.65 m long from its first frame on the floor, in place — a collapse's print — but the hands
-    carried the body all the way and the centre of pressure slid 0.05 m."""
-    a = np.array([0.9, 0.6])
-    crouch = dict(force_n=640.0, area_m2=0.045, length_m=0.8)
-    plank = dict(force_n=650.0, area_m2=0.052, length_m=1.65)
-    script = [(3.0, [body([1], a, **FEET)]), (1.0, [body([1], a + (0, 0.1), **crouch)]),
-              (1 / RATE, [body([1], a + (0, 0.15), **plank)]), (20.0, [body([1], a + (0, 0.3), **plank)])]
-    ev, _ = run(script)
-    assert ev == []
-
-
 def test_a_fall_whose_feet_carry_the_load_to_the_last_frame_is_still_a_fall():
     """The supported-descent rule needs both: here the load never drops, but the trunk lands 0.5 m from the feet."""
     a = np.array([0.9, 0.4])
@@ -407,13 +205,3 @@ def test_a_body_lying_dead_still_on_a_sparse_print_is_on_the_floor():
     ev, _ = run(script)
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
     assert 0 < ev[0][2] - 3.4 <= 1.5 and 29.9 <= ev[1][2] - 3.4 <= 32.0
-
-
-def test_a_long_hard_print_that_keeps_moving_is_not_lying():
-    """The same long, hard print that shifts every half second (a lunge, a plank's reps) never lies still."""
-    a = np.array([0.9, 0.4])
-    sparse = dict(force_n=300.0, area_m2=0.022, length_m=2.0)
-    script = [(3.0, [body([1], a, force_n=300.0, area_m2=0.025, length_m=0.6)]),
-              (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)])]
-    script += [(0.5, [body([1], a + (0.1, 0.6 + 0.05 * (k % 2)), **sparse)]) for k in range(60)]
-    assert run(script)[0] == []
