@@ -57,7 +57,7 @@ class BoardFirmware:
         self.plug_generation = 0
         self._stall_until = float("-inf")
         self._faults = PendingFaults(settings.seed)
-        self.injected: Counter = self._faults.injected  # what was actually applied, see the module docstring
+        self.injected: Counter = self._faults.injected  # what was actually applied (see virtual_board)
         self.sent: Counter = Counter()  # packets by name, "frames", "bytes" (handed out by read)
         self._power_off()
 

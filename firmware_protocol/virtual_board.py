@@ -18,6 +18,12 @@ Usage::
     board.tear_next_frame(); board.drop_bytes(20)     # faults hit the next frame / next bytes out
     dec.feed(board.read(2.0)); print(board.injected, dec.stats.as_dict())
 
+The board's arguments are :class:`~firmware_protocol.board_settings.BoardSettings`' (checked
+there, with the accepted values in the error); ``VirtualBoard(settings=...)`` takes one
+made beforehand. The parts: board_settings.py (what it is built with), board_faults.py
+(faults waiting to be applied), board_frames.py (rows scanned, packet bytes),
+board_firmware.py (the state machine this class puts a lock around).
+
 Time model (all times in the caller's seconds, any epoch, never going backwards):
 
 - Power-up happens at the first time the board is told (``read``/``receive``), or at
