@@ -30,6 +30,14 @@ from typing import Any, BinaryIO, Callable, Iterator
 
 from edge.frames import FrameAssembler, RawFrame
 from edge.sources.base import Link, LinkEnded, LinkLost, SourceError
+from edge.sources.board_info import (
+    IDENTITY,
+    board_mismatch_message,
+    identity_changes,
+    info_problems,
+    is_info,
+    no_info_message,
+)
 from edge.wiring import WiringMap
 from firmware_protocol import codec
 
@@ -37,7 +45,7 @@ log = logging.getLogger(__name__)
 
 _END = object()  # queue sentinel: the source has ended
 
-IDENTITY = ("device_id", "rows", "cols", "adc_bits", "sign")  # INFO fields a calibration is bound to
+__all__ = ["IDENTITY", "CarpetSource", "CommandRefused"]  # IDENTITY: kept importable from here
 
 
 class CommandRefused(SourceError):
@@ -200,7 +208,7 @@ class CarpetSource:
         while info is None:
             now = time.monotonic()
             if now > deadline:
-                raise SourceError(self._no_info_message())
+                raise SourceError(no_info_message(self.link.describe(), self.decoder.stats, self.handshake_timeout_s))
             if self.link.writable and now >= next_ask:
                 self._send("GET_INFO")
                 next_ask = now + 0.5
@@ -210,9 +218,8 @@ class CarpetSource:
                 raise SourceError(f"{self.link.describe()}: no INFO packet in the data; "
                                   "is it a capture written by `cavatar record`?") from None
             for pkt in self.decoder.feed(data):
-                if info is None and isinstance(pkt, (codec.Info, codec.ForeignInfo)):
-                    codec.check_compatible(pkt)
-                    problems = codec.info_range_problems(pkt)
+                if info is None and is_info(pkt):
+                    problems = info_problems(pkt)
                     if problems:
                         self.counters["info_out_of_range"] += 1
                         raise SourceError(f"{self.link.describe()}: the board's INFO is out of range: "
@@ -226,20 +233,6 @@ class CarpetSource:
         self.counters["handshakes"] += 1
         self._decode_s = 0.0  # what was decoded before (a lost link's last packets) belongs to no frame
 
-    def _no_info_message(self) -> str:
-        st = self.decoder.stats
-        where = self.link.describe()
-        if st.bytes_in == 0:
-            return f"{where}: no bytes from the board within {self.handshake_timeout_s} s; is it powered and running carpet firmware?"
-        if st.dropped.get("bad_crc", 0) >= 3 and st.packets == 0:
-            return (
-                f"{where}: {st.dropped['bad_crc']} well-framed packets failed their CRC and none passed: the board likely "
-                f"speaks another protocol definition (ours: v{codec.PROTOCOL_VERSION}, 0x{codec.DEFINITION_HASH:04X}); "
-                "update the firmware or the host"
-            )
-        return (f"{where}: {st.bytes_in} bytes but no INFO packet within {self.handshake_timeout_s} s "
-                "(wrong baud rate or not a carpet board?)")
-
     def _adopt_info(self, info: Any) -> None:
         """Adopt the first INFO; pin its board identity. A later INFO (mid-stream or after a replug) of
         another board stops the frames until the pinned board is back (``board_mismatch``)."""
@@ -248,15 +241,12 @@ class CarpetSource:
             wiring = WiringMap.from_config(self.wiring_config, info.rows, info.cols)
             self.assembler = FrameAssembler(info, wiring, missing_rows=self.missing_rows)
             return
-        diffs = [f"{key} {theirs!r} (was {ours!r})" for key, ours, theirs in
-                 ((key, getattr(self.info, key), getattr(info, key)) for key in IDENTITY) if ours != theirs]
+        diffs = identity_changes(self.info, info)
         assert self.assembler is not None  # made with the first INFO
         self.assembler.reset()
         if diffs:
             self.counters["board_mismatch"] += 1
-            message = ("another board answered: " + ", ".join(diffs) + ". Its frames are not used (the calibration "
-                       "and model belong to the first board); plug the original board back, or calibrate this one "
-                       "and restart with its calibration.")
+            message = board_mismatch_message(diffs)
             if message != self.board_mismatch:
                 log.error("%s: %s", self.link.describe(), message)
             self.board_mismatch = message
@@ -303,9 +293,8 @@ class CarpetSource:
 
     def _dispatch(self, pkt: Any) -> bool:
         """Handle one packet; True when it completed a frame."""
-        if isinstance(pkt, (codec.Info, codec.ForeignInfo)):
-            codec.check_compatible(pkt)
-            problems = codec.info_range_problems(pkt)
+        if is_info(pkt):
+            problems = info_problems(pkt)
             if problems:  # counted and ignored; never sizes a buffer
                 self.counters["info_out_of_range"] += 1
                 log.warning("%s: an INFO out of range ignored: %s", self.link.describe(), ", ".join(problems))
