@@ -27,7 +27,10 @@ def med3(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 def median3x3(p: np.ndarray) -> np.ndarray:
     """Exact 3×3 median of (H, W) with edge-replicated borders (ndimage ``mode='nearest'``)."""
     h, w = p.shape
-    q = np.pad(p, 1, mode="edge")
+    q = np.empty((h + 2, w + 2), dtype=p.dtype)  # edge-replicated border (np.pad costs more than the median)
+    q[1:-1, 1:-1] = p
+    q[0, 1:-1], q[-1, 1:-1] = p[0], p[-1]
+    q[:, 0], q[:, -1] = q[:, 1], q[:, -2]
     a, b, c = q[0:h], q[1 : h + 1], q[2 : h + 2]  # (H, W+2) vertical triples
     mn, mx = np.minimum(a, b), np.maximum(a, b)
     lo, hi = np.minimum(mn, c), np.maximum(mx, c)
@@ -41,6 +44,21 @@ def median3x3(p: np.ndarray) -> np.ndarray:
 def gaussian(p: np.ndarray, sigma_sensels: float) -> np.ndarray:
     """Separable Gaussian (truncated at 3σ); 'reflect' borders keep the total unchanged."""
     return ndimage.gaussian_filter(p, sigma_sensels, mode="reflect", truncate=3.0)
+
+
+def gaussian_kernel(sigma_sensels: float, truncate: float = 3.0) -> np.ndarray:
+    """(2r+1,) float64 normalised Gaussian taps, r = ⌊truncate·σ + ½⌋: the kernel ``gaussian`` applies."""
+    radius = int(truncate * sigma_sensels + 0.5)
+    x = np.arange(-radius, radius + 1)
+    taps = np.exp(-0.5 / (sigma_sensels * sigma_sensels) * x ** 2)
+    return taps / taps.sum()
+
+
+def gaussian_with(p: np.ndarray, taps: np.ndarray) -> np.ndarray:
+    """``gaussian`` with its taps computed once (the chain calls it every frame): rows, then columns,
+    the intermediate in p's dtype, as ndimage.gaussian_filter does."""
+    out = ndimage.correlate1d(p, taps, axis=0, mode="reflect")
+    return ndimage.correlate1d(out, taps, axis=1, output=out, mode="reflect")
 
 
 class MaskedFill:
@@ -99,6 +117,7 @@ class FilterChain:
         self.median = config.median_3x3 and pitch_mm <= config.median_max_pitch_mm + 1e-9
         self.sigma_sensels = config.gaussian_sigma_mm / pitch_mm
         self.gauss = self.sigma_sensels >= 0.3
+        self._taps = gaussian_kernel(self.sigma_sensels) if self.gauss else None
         self.ema_tau_s = config.ema_tau_s
         self._fill: MaskedFill | None = None
         self.reset()
@@ -143,7 +162,8 @@ class FilterChain:
         if self.median:
             p = median3x3(p)
         if self.gauss:
-            p = gaussian(p, self.sigma_sensels)
+            assert self._taps is not None  # set whenever gauss is
+            p = gaussian_with(p, self._taps)
         if self.ema_tau_s > 0:
             if self._ema is not None and dt is not None and dt > 0:
                 alpha = np.float32(1.0 - math.exp(-dt / self.ema_tau_s))

@@ -33,13 +33,17 @@ class OneEuroFilter:
         self.min_cutoff_hz, self.beta, self.d_cutoff_hz = min_cutoff_hz, beta, d_cutoff_hz
         self._x: np.ndarray | None = None
         self._dx: np.ndarray | None = None
+        self._sx: float | None = None  # the state when filtering plain scalars (see _scalar)
+        self._sdx = 0.0
         self._t_s: float | None = None
         self.skipped = 0  # samples refused because they (or their time) were not finite
 
     def reset(self) -> None:
-        self._x = self._dx = self._t_s = None
+        self._x = self._dx = self._t_s = self._sx = None
 
     def __call__(self, x, t_s: float):
+        if isinstance(x, (float, int, np.floating, np.integer)) and not isinstance(x, bool):
+            return self._scalar(float(x), float(t_s))
         x = np.asarray(x, dtype=np.float64)
         t = float(t_s)
         # NaN compares false and ∞ would freeze the clock: either would poison every later sample.
@@ -64,3 +68,26 @@ class OneEuroFilter:
             return self._x.copy() if x.ndim else float(self._x)
         self._x, self._dx, self._t_s = new_x, new_dx, t
         return self._x.copy() if x.ndim else float(self._x)
+
+    def _scalar(self, x: float, t: float) -> float:
+        """``__call__`` for a plain scalar, in Python floats: the same IEEE arithmetic as the array path
+        without numpy's per-call cost (the tracker filters every track's force each frame)."""
+        last = self._sx
+        if not (math.isfinite(t) and math.isfinite(x)):
+            self.skipped += 1
+            return x if last is None else last
+        if last is None or self._t_s is None:
+            self._sx, self._sdx, self._t_s = x, 0.0, t
+            return x
+        if t <= self._t_s:
+            return last
+        dt = t - self._t_s
+        new_dx = self._sdx + smoothing_alpha(self.d_cutoff_hz, dt) * ((x - last) / dt - self._sdx)
+        speed = abs(new_dx)
+        a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt) if math.isfinite(speed) else 1.0
+        new_x = last + a * (x - last)
+        if not (math.isfinite(new_x) and math.isfinite(new_dx)):  # e.g. a huge jump over a tiny dt
+            self.skipped += 1
+            return last
+        self._sx, self._sdx, self._t_s = new_x, new_dx, t
+        return new_x

@@ -81,13 +81,10 @@ def prior_keys(labels: np.ndarray, n_blobs: int, prev_keys: np.ndarray | None) -
     if not both.any():
         return out
     span = int(prev_keys.max()) + 1
-    pairs, counts = np.unique(labels[both].astype(np.int64) * span + prev_keys[both], return_counts=True)
-    blob, key = pairs // span, pairs % span
-    order = np.lexsort((-counts, blob))  # by blob, most sensels first
-    blob, key = blob[order], key[order]
-    first = np.ones(len(blob), dtype=bool)
-    first[1:] = blob[1:] != blob[:-1]
-    out[blob[first] - 1] = key[first]
+    counts = np.bincount(labels[both].astype(np.int64) * span + prev_keys[both], minlength=(n_blobs + 1) * span)
+    counts = counts.reshape(n_blobs + 1, span)[1:]  # (blob, key) sensel counts
+    seen = counts.any(axis=1)
+    out[seen] = counts[seen].argmax(axis=1)  # most sensels; a tie goes to the lower key
     return out
 
 
@@ -162,10 +159,12 @@ def group_blobs(
     owner = np.zeros(n, dtype=np.int64)
     if moved_at_once(forces_n, priors, bodies, stayed):
         priors = owner  # everyone's contacts are new: regrouped afresh, each group matched by the tracker
-    for i in range(n):
-        k = int(priors[i])
-        if k in bodies and np.linalg.norm(centres_m[i] - bodies[k].centre_m) <= bodies[k].reach_m:
-            owner[i] = k
+    known = [i for i in range(n) if int(priors[i]) in bodies]
+    if known:  # a contact stays with its track while the body still reaches it
+        body = [bodies[int(priors[i])] for i in known]
+        d = np.linalg.norm(centres_m[known] - np.array([b.centre_m for b in body]), axis=1)
+        near = d <= np.array([b.reach_m for b in body])
+        owner[np.array(known)[near]] = priors[np.array(known)[near]]
     _reach(centres_m, forces_n, owner, bodies, group_radius_m)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
@@ -212,7 +211,7 @@ def moved_at_once(forces_n: np.ndarray, priors: np.ndarray, bodies: dict[int, Bo
     if len(seen) < 2 or sum(seen) <= 0:  # one body's contacts moving at once are still that body's
         return False
     before = sum(seen)
-    kept = float(forces_n[np.isin(priors, list(bodies))].sum())
+    kept = float(forces_n[np.array([int(k) in bodies for k in priors], dtype=bool)].sum())
     gone = kept < MOVED_KEEP_FRACTION * before or (stayed is not None and stayed < MOVED_KEEP_FRACTION)
     return gone and float(forces_n.sum()) - kept >= kept
 
@@ -278,13 +277,19 @@ def _reach(centres_m: np.ndarray, forces_n: np.ndarray, owner: np.ndarray, bodie
 
 def _split_far(centres_m: np.ndarray, forces_n: np.ndarray, split_distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
     """(keep, rest) bool masks when the contacts fall in parts more than split_distance_m apart (the heaviest part keeps)."""
-    if len(centres_m) < 2 or pdist(centres_m).max() <= split_distance_m:  # the usual case, at once
+    if len(centres_m) < 2 or _span_m(centres_m) <= split_distance_m:  # the usual case, at once
         return None
     comp = single_linkage(centres_m, split_distance_m)
     if comp.max() == 0:
         return None
     heaviest = int(np.argmax(np.bincount(comp, weights=forces_n)))
     return comp == heaviest, comp != heaviest
+
+
+def _span_m(centres_m: np.ndarray) -> float:
+    """The largest distance (m) between two of (n ≥ 2, 2) points; scipy's pdist costs more than the sum for a handful."""
+    d = centres_m[:, None, :] - centres_m[None, :, :]
+    return float(np.sqrt((d * d).sum(axis=-1)).max())
 
 
 def _excess_n(forces_n: np.ndarray, body: Body, min_person_force_n: float) -> float | None:

@@ -177,10 +177,7 @@ class SceneTracker:
         for g, (idx, _) in enumerate(groups):
             lut[idx + 1] = g + 1
         owner = lut[labels]  # group index + 1 per contact sensel
-        grown = owner
-        if self.margin_sensels > 0:
-            spread = ndimage.maximum_filter(owner, size=2 * self.margin_sensels + 1)
-            grown = np.where(owner > 0, owner, spread)
+        grown = _grow(owner, self.margin_sensels)
         sensel_m2 = self.pitch_m * self.pitch_m
         obs, masks = [], []
         for g, (idx, _) in enumerate(groups):
@@ -220,13 +217,16 @@ class SceneTracker:
         kept = blob_key[1:] == priors  # a blob keeps its join time while it stays with its track
         self._prev_join = np.concatenate([[np.nan], np.where(kept, joined, t_s)])[labels]
         out = []
-        for (idx, _), tr, o, mask in zip(groups, tracks, obs, masks):
+        boxes = ndimage.find_objects(grown, max_label=len(groups))  # every group's bounding box at once
+        tol = self._still_tolerance_kpa()
+        for (idx, _), tr, o, mask, box in zip(groups, tracks, obs, masks, boxes):
             if tr is None or tr.track_id is None:
                 continue
             out.append(PersonObservation(
                 track_id=tr.track_id, cop_m=tr.cop_m.copy(), force_n=tr.force_n, cop_raw_m=o.cop_m, force_raw_n=o.force_n,
                 area_m2=float(sum(blobs[i].area_m2 for i in idx)), velocity_m_s=tr.velocity_m_s.copy(), mask=mask,
-                bbox=_bbox(mask), contacts=len(idx), still=self._stillness(tr, filtered, mask), age_s=t_s - tr.first_t_s))
+                bbox=box or (slice(0, 0), slice(0, 0)), contacts=len(idx), still=self._stillness(tr, filtered, mask, tol),
+                age_s=t_s - tr.first_t_s))
         return out
 
     def _stayed(self, filtered: np.ndarray) -> float | None:
@@ -270,10 +270,16 @@ class SceneTracker:
         np.maximum.at(latest, labels[same] - 1, self._prev_join[same])  # only the contact sensels: cheap
         return np.where(np.isfinite(latest), latest, t_s)
 
-    def _stillness(self, tr, filtered: np.ndarray, mask: np.ndarray) -> bool:
+    def _still_tolerance_kpa(self) -> float:
+        """RMS change (kPa) within which a person's pressure counts as unchanged: configured, or 3σ of the noise."""
         tol = self.config.still_rms_kpa
         if tol is None:
             tol = max(3.0 * (float(np.mean(self._noise)) if self._noise is not None else 0.0), 0.05)
+        return tol
+
+    def _stillness(self, tr, filtered: np.ndarray, mask: np.ndarray, tol: float) -> bool:
+        """Whether the pressure over the track's mask stayed within tol (RMS) of its reference frame, which
+        is set anew whenever it did not."""
         if tr.ref_pressure_kpa is not None:
             union = mask | tr.ref_mask
             d = filtered[union] - tr.ref_pressure_kpa[union]
@@ -283,9 +289,19 @@ class SceneTracker:
         return False
 
 
-def _bbox(mask: np.ndarray) -> tuple[slice, slice]:
-    rows, cols = np.any(mask, axis=1), np.any(mask, axis=0)
-    r, c = np.nonzero(rows)[0], np.nonzero(cols)[0]
-    if len(r) == 0:
-        return slice(0, 0), slice(0, 0)
-    return slice(int(r[0]), int(r[-1]) + 1), slice(int(c[0]), int(c[-1]) + 1)
+def _grow(owner: np.ndarray, margin: int) -> np.ndarray:
+    """(H, W) group labels (0: none) → each group grown by ``margin`` sensels into unlabelled ones (the
+    higher label where two meet). Filtered over the labels' bounding box widened by twice the margin
+    only: every window beyond it holds zeros alone, and the border reflects as over the whole frame."""
+    if margin <= 0:
+        return owner
+    rows, cols = np.flatnonzero(owner.any(axis=1)), np.flatnonzero(owner.any(axis=0))
+    if len(rows) == 0:
+        return owner
+    (h, w), reach = owner.shape, 2 * margin
+    box = (slice(max(int(rows[0]) - reach, 0), min(int(rows[-1]) + reach + 1, h)),
+           slice(max(int(cols[0]) - reach, 0), min(int(cols[-1]) + reach + 1, w)))
+    part = owner[box]
+    grown = owner.copy()
+    grown[box] = np.where(part > 0, part, ndimage.maximum_filter(part, size=2 * margin + 1))
+    return grown

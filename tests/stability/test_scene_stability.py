@@ -42,7 +42,8 @@ def assert_state_finite(tracker: SceneTracker) -> None:
     for tr in tracker.people.tracks.values():
         assert np.isfinite(tr.cop_m).all() and math.isfinite(tr.force_n) and np.isfinite(tr.velocity_m_s).all()
         for flt in (tr.cop_filter, tr.force_filter):
-            assert np.isfinite(flt._x).all() and np.isfinite(flt._dx).all() and math.isfinite(flt._t_s)
+            x, dx = (flt._x, flt._dx) if flt._sx is None else (flt._sx, flt._sdx)  # array or scalar state
+            assert np.isfinite(x).all() and np.isfinite(dx).all() and math.isfinite(flt._t_s)
 
 
 CENTRE = [(0.9, 0.8), (0.9, 1.0)]

@@ -5,7 +5,7 @@ from scene_worlds import noisy, render
 from scipy import ndimage
 
 from edge.scene import MaskedFill, OneEuroFilter, SceneConfig, SceneTracker, median3x3
-from edge.scene.filters import FilterChain
+from edge.scene.filters import FilterChain, gaussian_kernel, gaussian_with
 
 PITCH = 0.01905
 PERSON = {"centre_m": (0.9, 0.8), "heading_rad": 0.4, "mass_kg": 70.0}
@@ -17,6 +17,31 @@ def test_fast_median_equals_ndimage():
         p = rng.normal(size=shape).astype(np.float32)
         p[rng.random(shape) < 0.2] = 3.0  # ties
         assert np.array_equal(median3x3(p), ndimage.median_filter(p, size=3, mode="nearest"))
+
+
+def test_gaussian_with_cached_taps_equals_ndimage():
+    """The chain's Gaussian (taps computed once) gives ndimage.gaussian_filter's frame bit for bit."""
+    rng = np.random.default_rng(3)
+    for sigma in (0.4, 1.05, 2.6):
+        p = (rng.random((40, 33)) * 80).astype(np.float32)
+        want = ndimage.gaussian_filter(p, sigma, mode="reflect", truncate=3.0)
+        got = gaussian_with(p, gaussian_kernel(sigma))
+        assert got.dtype == np.float32
+        np.testing.assert_array_equal(got, want)
+
+
+def test_one_euro_scalars_match_the_array_path():
+    """Plain floats take a numpy-free path: the same values as a 1-element array, bad samples skipped alike."""
+    a, b = OneEuroFilter(1.0, 0.8, 1.0), OneEuroFilter(1.0, 0.8, 1.0)
+    rng = np.random.default_rng(5)
+    t = 0.0
+    for i in range(200):
+        t += 1 / 14 if i != 50 else 0.0  # one repeated time
+        x = float(700 + 40 * np.sin(i / 9) + rng.normal(0, 5)) if i != 90 else float("nan")
+        got, want = a(x, t), b(np.array([x]), t)
+        assert isinstance(got, float)
+        assert got == float(want[0])
+    assert a.skipped == b.skipped == 1
 
 
 def test_salt_noise_is_removed_and_empty_stays_empty():
