@@ -23,8 +23,9 @@ import numpy as np  # noqa: E402
 
 from bench import machine  # noqa: E402
 from calibration import Applier  # noqa: E402
+from calibration.baseline import BaselineTracker  # noqa: E402
 from calibration.from_truth import calibration_from_truth  # noqa: E402
-from calibration.runtime import BaselineTracker, CalibratedFrames  # noqa: E402
+from calibration.runtime import CalibratedFrames  # noqa: E402
 from sim.footsteps import FootstepCarpet  # noqa: E402
 from sim.sensor import CarpetSensor  # noqa: E402
 

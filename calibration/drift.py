@@ -16,7 +16,7 @@ condition has been clearly gone (hysteresis)::
     age             the calibration is older than ``max_age_days``      never
 
 σ is the calibration's per-sensel noise (its median for the global rule). Offsets are
-measured on the tracked baseline (``calibration.runtime.BaselineTracker``), in counts
+measured on the tracked baseline (``calibration.baseline.BaselineTracker``), in counts
 toward the pressure rail. Every :class:`Advice` carries a sentence an installer can
 act on. ``DriftMonitor.active`` lists what currently holds.
 

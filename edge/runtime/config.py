@@ -7,7 +7,7 @@
 Every key described, and the file as TOML: :mod:`edge.runtime.config_docs`.
 
 Sections: ``[device]``, ``[source]``, ``[calibration]`` (and ``[calibration.baseline]``,
-handed to :class:`calibration.runtime.BaselineConfig`), ``[model]``, ``[scene]`` (handed to
+handed to :class:`calibration.baseline.BaselineConfig`), ``[model]``, ``[scene]`` (handed to
 :class:`edge.scene.SceneConfig`, whose own keys and checks apply), ``[sinks]``, ``[runtime]``.
 Every section and key is optional; what is left out takes its default.
 
@@ -26,7 +26,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from calibration.runtime import BaselineConfig
+from calibration.baseline import BaselineConfig
 from cavatar_common.config import at_least_zero, between, described, expected_type, positive
 from edge.scene import SceneConfig
 from edge.scene.falls import FallConfig

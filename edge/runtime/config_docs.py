@@ -73,7 +73,7 @@ def section_docs() -> dict[str, str]:
     """Section path → its one-line purpose."""
     out = {name: (kind.__doc__ or "").strip().splitlines()[0] for name, kind in SECTIONS.items()}
     out["scene"] = "Filters, contact detection, people segmentation and tracking (edge.scene.SceneConfig)."
-    out["calibration.baseline"] = "Runtime baseline tracking of the calibration (calibration.runtime.BaselineConfig)."
+    out["calibration.baseline"] = "Runtime baseline tracking of the calibration (calibration.baseline.BaselineConfig)."
     return out
 
 
