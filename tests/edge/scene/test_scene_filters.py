@@ -109,3 +109,16 @@ def test_one_euro_smooths_still_and_follows_motion():
     slow = OneEuroFilter(min_cutoff_hz=1.0, beta=0.0)
     slow_out = [slow(x, ti) for x, ti in zip(ramp, t)]
     assert 0 <= lag < 0.05 and lag < 0.5 * (ramp[-1, 0] - slow_out[-1][0])
+
+
+def test_mask_margin_dilation_equals_ndimage():
+    """The masks' margin (shifted maxima over the labels' box) grows labels exactly as ndimage.maximum_filter."""
+    from edge.scene.pipeline import _grow, _window_max
+
+    rng = np.random.default_rng(2)
+    for shape in ((96, 96), (5, 7), (1, 9), (20, 33)):
+        for r in (1, 2, 3):
+            labels = (rng.random(shape) < 0.05) * rng.integers(1, 5, shape)
+            want = ndimage.maximum_filter(labels, size=2 * r + 1)
+            np.testing.assert_array_equal(_window_max(labels, r), want)
+            np.testing.assert_array_equal(_grow(labels, r), np.where(labels > 0, labels, want))
