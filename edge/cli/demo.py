@@ -3,7 +3,7 @@
     python -m edge.cli.demo --out out/run --seconds 20 --people 2 --seed 7
 
 1. runs ``cavatar run``'s own loop (:func:`edge.cli.run.serve`, the one-line summary each
-   second) on ``sim://?people=2&seed=7`` for ``--seconds`` into ``<out>/bodies.jsonl``
+   second) on ``sim://?people=2&seed=7&scene_s=…`` for ``--seconds`` into ``<out>/bodies.jsonl``
    (status ``<out>/status.json``; the virtual carpet's calibration is made, or reused, at
    ``<out>/calibration-sim-<seed>-96.npz``);
 2. writes ``<out>/frames.json``: the simulator frame of every published seq (records carry
@@ -31,9 +31,22 @@ import numpy as np
 from edge.runtime.config import RuntimeConfig
 
 
+def demo_scene_s(seconds: float) -> float:
+    """The virtual carpet's scene length for a run of ``seconds``: whole scenes of about 10 s, the last one
+    cut at its middle. At a scene change everyone moves elsewhere at once (no real carpet does that) and
+    a new track needs a few frames, so a run that ended just after one would draw its last column there."""
+    scenes = max(1, int(seconds / 10.0 + 0.5))
+    return round(seconds / (scenes - 0.5), 3)
+
+
+def demo_url(people: int, seed: int, seconds: float) -> str:
+    """The demo's source: the virtual carpet with ``people`` and ``seed``, scenes as ``demo_scene_s`` says."""
+    return f"sim://?people={people}&seed={seed}&scene_s={demo_scene_s(seconds)}"
+
+
 def demo_config(out_dir: Path, seconds: float, people: int, seed: int) -> RuntimeConfig:
     return RuntimeConfig().with_overrides(
-        source=f"sim://?people={people}&seed={seed}", sinks=[f"jsonl://{out_dir}/bodies.jsonl"],
+        source=demo_url(people, seed, seconds), sinks=[f"jsonl://{out_dir}/bodies.jsonl"],
         status_file=str(out_dir / "status.json"), seconds=seconds, device="sim-demo")
 
 
@@ -88,7 +101,7 @@ def match_people(truth_xyz: list, published_xyz: list) -> list[int]:
 
 
 def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int], people: int, seed: int,
-                 rate_hz: float = 14.0, model_label: str = "") -> Path:
+                 rate_hz: float = 14.0, model_label: str = "", seconds: float = 20.0) -> Path:
     """Truth (top row) and reconstruction (bottom row), front view, one column per record."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -99,7 +112,7 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
 
     if not records:
         raise ValueError("no record with people to draw")
-    url = f"sim://?people={people}&seed={seed}&speed=0"  # the run's carpet, made again for its truth
+    url = demo_url(people, seed, seconds) + "&speed=0"  # the run's carpet, made again for its truth
     plugin = source_plugin(url)
     if plugin is None:
         raise ValueError("sim:// is served by no source plug-in here")
@@ -136,7 +149,7 @@ def render_strip(out_png: Path, records: list[dict], frame_of_seq: dict[int, int
         ax_r.set_title(f"seq {rec['seq']}: tracks {', '.join(str(p['track_id']) for p in ppl)}\n{acts_r}", fontsize=8)
     axes[0, 0].set_ylabel("TRUTH (simulator)\nz, m", fontsize=9)
     axes[1, 0].set_ylabel(f"RECONSTRUCTED\n{model_label}\nz, m", fontsize=9)
-    fig.suptitle(f"sim://?people={people}&seed={seed}: front view (x right, z up, metres); top: the simulator's "
+    fig.suptitle(f"{demo_url(people, seed, seconds)}: front view (x right, z up, metres); top: the simulator's "
                  "true bodies, bottom: what the runtime published", fontsize=10)
     fig.tight_layout()
     fig.savefig(out_png)
@@ -166,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     records = pick_records(jsonl, frame_of_seq, args.columns)
     png = args.out / "bodies.png"
     render_strip(png, records, frame_of_seq, args.people, args.seed, final["source"]["board"].get("rate_hz", 14.0),
-                 final["model"].get("version", ""))
+                 final["model"].get("version", ""), args.seconds)
     q = final["source"]["queue"].get("dropped_slow_consumer", 0)
     print(f"\nrecords: {jsonl} ({final['publish']['published']} published, {final['publish']['heartbeats']} heartbeats)")
     print(f"status:  {args.out / 'status.json'} (`cavatar status --file {args.out / 'status.json'}`)")
