@@ -14,9 +14,12 @@ from firmware_protocol import codec
 IDENTITY = ("device_id", "rows", "cols", "adc_bits", "sign")  # INFO fields a calibration is bound to
 
 
+INFO_TYPES = (codec.Info, codec.ForeignInfo)  # an INFO of our protocol definition or another's
+
+
 def is_info(pkt: Any) -> bool:
     """Whether ``pkt`` is an INFO, of our protocol definition or another's."""
-    return isinstance(pkt, (codec.Info, codec.ForeignInfo))
+    return isinstance(pkt, INFO_TYPES)
 
 
 def info_problems(info: Any) -> list[str]:

@@ -32,6 +32,7 @@ from edge.frames import FrameAssembler, RawFrame
 from edge.sources.base import Link, LinkEnded, LinkLost, SourceError
 from edge.sources.board_info import (
     IDENTITY,
+    INFO_TYPES,
     board_mismatch_message,
     identity_changes,
     info_problems,
@@ -293,7 +294,7 @@ class CarpetSource:
 
     def _dispatch(self, pkt: Any) -> bool:
         """Handle one packet; True when it completed a frame."""
-        if is_info(pkt):
+        if isinstance(pkt, INFO_TYPES):  # per packet: no call on the hot path
             problems = info_problems(pkt)
             if problems:  # counted and ignored; never sizes a buffer
                 self.counters["info_out_of_range"] += 1
