@@ -38,6 +38,8 @@ from typing import Any
 
 import numpy as np
 
+from cavatar_common.atomic import write_atomic
+
 SCHEMA = "cavatar.calibration/1"
 ARRAYS = {"baseline_counts": np.float32, "noise_counts": np.float32, "gain": np.float32, "fault": np.uint8}
 
@@ -249,12 +251,9 @@ class Calibration:
         """Write atomically; returns the SHA-256 recorded in the file."""
         arrays, meta_json = self._payload()
         self.sha256 = self._digest(arrays, meta_json)
-        path = Path(path)
-        part = path.with_name(path.name + ".part")
         buf = io.BytesIO()
         np.savez_compressed(buf, meta=np.array(json.dumps({**json.loads(meta_json), "sha256": self.sha256})), **arrays)
-        part.write_bytes(buf.getvalue())
-        os.replace(part, path)
+        write_atomic(path, buf.getvalue())  # fsynced: the board restarts with this calibration
         return self.sha256
 
     @classmethod

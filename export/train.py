@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import random
 import signal
 import sys
@@ -30,6 +29,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from cavatar_common.atomic import atomic_path
 from cavatar_common.config import strict_from_dict
 from export.model import CAvatarNet, JointDiscriminator, ModelConfig
 
@@ -280,9 +280,8 @@ class Trainer:
 
     def save(self, name: str = CHECKPOINT) -> Path:
         path = self.out / name
-        part = path.with_name(path.name + ".part")
-        torch.save(self.state(), part)
-        os.replace(part, path)
+        with atomic_path(path) as part:  # fsynced: training resumes from it after a crash
+            torch.save(self.state(), part)
         return path
 
     def load(self, path: str | Path) -> None:

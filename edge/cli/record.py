@@ -6,6 +6,7 @@ import argparse
 import os
 import time
 
+from cavatar_common.atomic import atomic_path
 from edge.cli import CliError, command_name
 
 
@@ -33,33 +34,31 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--frames must be at least 1")
     if os.path.exists(args.out) and not args.force:
         raise CliError(f"{args.out} exists; pass --force to overwrite it")
-    part = args.out + ".part"
     got = 0
     try:
-        fh = open(part, "wb")  # before the board is opened: an unwritable destination wastes no recording
-    except OSError as exc:
-        raise CliError(f"cannot write {args.out}: {exc.strerror or exc}; give a path in a folder you can write") from None
-    try:
-        with fh:
+        with atomic_path(args.out) as part:  # renamed into place, fsynced, only once every frame is in
             try:
-                source = open_source(args.source, record_to=fh, queue_frames=1024)
-                source.start()
-            except (SourceError, ValueError) as exc:
-                raise CliError(str(exc)) from None
-            deadline = time.monotonic() + args.timeout
-            try:
-                for _ in source.frames(timeout_s=max(0.1, args.timeout)):
-                    got += 1
-                    if got >= args.frames or time.monotonic() > deadline:
-                        break
-            finally:
-                source.stop()
-        if got < args.frames:
-            raise CliError(f"only {got} of {args.frames} frames arrived within {args.timeout} s; nothing written")
-        os.replace(part, args.out)
-    finally:
-        if os.path.exists(part):
-            os.remove(part)
+                fh = open(part, "wb")  # before the board is opened: an unwritable destination wastes no recording
+            except OSError as exc:
+                raise CliError(f"cannot write {args.out}: {exc.strerror or exc}; give a path in a folder you can write") from None
+            with fh:
+                try:
+                    source = open_source(args.source, record_to=fh, queue_frames=1024)
+                    source.start()
+                except (SourceError, ValueError) as exc:
+                    raise CliError(str(exc)) from None
+                deadline = time.monotonic() + args.timeout
+                try:
+                    for _ in source.frames(timeout_s=max(0.1, args.timeout)):
+                        got += 1
+                        if got >= args.frames or time.monotonic() > deadline:
+                            break
+                finally:
+                    source.stop()
+            if got < args.frames:
+                raise CliError(f"only {got} of {args.frames} frames arrived within {args.timeout} s; nothing written")
+    except OSError as exc:  # the capture could not be completed on disk (full, removed folder): nothing written
+        raise CliError(f"cannot write {args.out}: {exc.strerror or exc}") from None
     size = os.path.getsize(args.out)
     print(f"recorded {got} frames, {size} bytes from {args.source} to {args.out}")
     return 0

@@ -25,6 +25,8 @@ import json
 import os
 from pathlib import Path
 
+from cavatar_common.atomic import write_atomic
+
 BLOCK = 1024  # seqs reserved per write: at 14 Hz one write every ~73 s
 
 
@@ -130,22 +132,7 @@ class SeqLedger:
         return data
 
     def _write(self, data: dict[str, int]) -> None:
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        try:
-            with open(tmp, "w", encoding="utf-8") as f:
-                json.dump(data, f, sort_keys=True)
-                f.write("\n")
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, self.path)
-        except OSError:
-            tmp.unlink(missing_ok=True)
-            raise
-        dir_fd = os.open(self.path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
+        write_atomic(self.path, json.dumps(data, sort_keys=True) + "\n")  # fsynced, renamed, folder fsynced
 
 
 __all__ = ["BLOCK", "SeqLedger", "SeqLedgerBusy", "SeqLedgerError"]

@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any, Mapping
 from urllib.parse import unquote
 
+from cavatar_common.atomic import write_atomic
 from edge.health import OK, CheckContext, Finding, writable_file
 from edge.record import RecordError, check_record, dumps
 from edge.sinks.base import Option, Sink, SinkError, parse_sink_url
@@ -341,10 +342,8 @@ class JsonlSink(Sink):
         from edge.topics import info_payload
 
         target = self.path.with_name(f"{self.path.stem}.info.json")
-        tmp = target.with_name(target.name + ".tmp")
         try:
-            tmp.write_text(dumps(info_payload(self.device, info, time.time())) + "\n", encoding="utf-8")
-            os.replace(tmp, target)
+            write_atomic(target, dumps(info_payload(self.device, info, time.time())) + "\n")
         except OSError as exc:
             self.counters.add("errors")
             log.error("jsonl:// cannot write %s: %s", target, exc)

@@ -36,6 +36,7 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from cavatar_common.atomic import atomic_path
 from edge.record import RecordError, check_record, check_telemetry
 from edge.topics import EVENTS_SCHEMA
 
@@ -341,14 +342,10 @@ def _read_own(path: Path, limit: int) -> bytes | None:
 
 
 def _write_file(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
-    try:
-        _write_all(fd, data)
-        os.fsync(fd)
-    except OSError:
-        os.close(fd)
-        tmp.unlink(missing_ok=True)
-        raise
-    os.close(fd)
-    os.replace(tmp, path)
+    """``data`` as the whole of ``path``, owner-only (records stay private), via the atomic-write helper."""
+    with atomic_path(path) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
+        try:
+            _write_all(fd, data)
+        finally:
+            os.close(fd)

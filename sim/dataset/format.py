@@ -34,13 +34,13 @@ dataset that looks complete.
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
 
+from cavatar_common.atomic import atomic_path, write_atomic
 from cavatar_common.provenance import git_revision, sha256_file
 
 SCHEMA = "cavatar.dataset/1"
@@ -115,18 +115,14 @@ class DatasetWriter:
         checked["fault_mask"] = np.asarray(arrays.get("fault_mask", np.zeros((self.rows, self.cols))), np.uint8)
         index = len(self.manifest["shards"])
         path = self.dir / f"shard-{index:05d}.npz"
-        part = path.with_name(path.name + ".part")
-        with open(part, "wb") as fh:
+        with atomic_path(path, durable=False) as part, open(part, "wb") as fh:  # regenerable: no fsync per shard
             np.savez_compressed(fh, **checked)
-        os.replace(part, path)
         self.manifest["shards"].append({"file": path.name, "frames": n, "sha256": sha256_file(path), **(info or {})})
         return path
 
     def close(self) -> None:
         self.manifest["frames"] = sum(s["frames"] for s in self.manifest["shards"])
-        part = self.dir / "manifest.json.part"
-        part.write_text(json.dumps(self.manifest, indent=1))
-        os.replace(part, self.dir / "manifest.json")
+        write_atomic(self.dir / "manifest.json", json.dumps(self.manifest, indent=1))
 
 
 class Dataset:
