@@ -50,7 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                       "loads and variety against published ranges; writes audit.json and audit.md.")
     au.add_argument("--out", default="docs/sim/audit", help="output folder (default docs/sim/audit)")
     au.add_argument("--subjects", type=int, default=3, help="subjects per activity (default 3)")
-    au.add_argument("--seconds", type=float, default=12.0, help="seconds per activity (default 12)")
+    au.add_argument("--seconds", type=float, default=8.0,
+                    help="seconds per activity (default 8: what `make model`'s main training set uses)")
     au.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     au.set_defaults(func=run_audit)
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])

@@ -18,7 +18,7 @@ AUDIT_ACTIVITIES = ("stepping", "bending", "turning", "squat", "twisting", "rais
                     "sit_up", "walking")
 
 
-def run_audit(subjects: int = 3, seconds: float = 12.0, seed: int = 0, activities=AUDIT_ACTIVITIES, spread_subjects: int = 8,
+def run_audit(subjects: int = 3, seconds: float = 8.0, seed: int = 0, activities=AUDIT_ACTIVITIES, spread_subjects: int = 8,
               progress=None) -> dict:
     from edge.body import BodyModel
     from sim.audit import checks as ck

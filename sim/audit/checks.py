@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from sim.audit.measure import REGIONS, arrays
+from sim.motion.activities import MAX_STRETCH
 
 SLOW = ("bending", "squat", "twisting", "raising_arms", "sitting", "push_up", "sit_up")
 # Whole-body vertical force / body weight that ≥ 95 % of an activity's frames should stay within.
@@ -54,6 +55,10 @@ def physics_checks(activity: str, frames, label_index: int, standing_index: int)
                       "%", 95, 100, SRC_FORCE))
     out.append(_check(f"balance.{activity}", f"{activity}: contact solves whose COP target is reachable (within 5 mm)",
                       _pct(a["target_ok"][own]), "%", 99, 100, SRC_BALANCE))
+    out.append(_check(f"tempo.{activity}", f"{activity}: keys at the subject's own durations (median time factor)",
+                      float(np.median(frames.tempo)) if frames.tempo else None, "×", 0.9, MAX_STRETCH,
+                      "an activity squeezed into its slot moves faster than the person would (issue 13: timelines "
+                      "stretched to fill --seconds-per-activity); accelerations grow with the square"))
     still = own & a["still"]
     if still.any():  # stepping and walking never stand still
         out.append(_check(f"support.{activity}", f"{activity}: still frames with the COM over the support",

@@ -59,6 +59,7 @@ class Frames:
     com_xy: list = field(default_factory=list)
     foot_hull_dist: list = field(default_factory=list)  # (2,) ZMP distance outside each foot's contact hull, m
     segment: list = field(default_factory=list)  # (subject, frame) of each entry
+    tempo: list = field(default_factory=list)  # per subject: the activity's keys against their own durations (< 1: squeezed)
 
 
 def _hull_distance(points: np.ndarray, p: np.ndarray) -> float:
@@ -143,6 +144,7 @@ def measure_activity(activity: str, subjects: int, seconds: float, seed: int, ca
         subj = Subject.random(100 + s, seed * 1000 + 100 + s)
         track = person_track(subj, [activity], seconds, rate_hz, rng=np.random.default_rng((seed, s)), model=body,
                              start_xy=(size / 2, size / 2))
+        frames.tempo.append(1.0 if track.tempo is None else float(track.tempo[0]))
         measure_track(frames, carpet, body, tissue, track, regions, s)
     return frames
 

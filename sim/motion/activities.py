@@ -120,6 +120,7 @@ def standing_frame(style, rng, seconds, label, body, lead_in=(0.4, 0.9), lead_ou
     took = tl.duration_s - a
     stretch = min(slot / max(took, 1e-9), MAX_STRETCH)
     tl.scale_to(a + took * stretch, fixed=first)
+    tl.tempo_factor = stretch
     rest = slot - took * stretch
     if rest > 1e-6:  # a pause before the next activity, still part of this one (repetitions end in pauses too)
         tl.add(rest, BASE, FEET, LF, label=label)

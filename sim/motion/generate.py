@@ -92,6 +92,7 @@ class Track:
     activity: np.ndarray
     contact: np.ndarray
     rate_hz: float
+    tempo: np.ndarray | None = None  # (activities,) each one's keys against the subject's own durations (< 1: squeezed)
 
     def __len__(self) -> int:
         return len(self.transl_m)
@@ -109,7 +110,7 @@ class Track:
         pose[:, :3] = root.as_rotvec()
         transl = self.transl_m @ r.T
         transl[:, :2] += np.asarray(offset_xy, float)
-        return Track(self.subject_id, self.betas, pose, transl, self.activity, self.contact, self.rate_hz)
+        return Track(self.subject_id, self.betas, pose, transl, self.activity, self.contact, self.rate_hz, self.tempo)
 
 
 @dataclass
@@ -165,7 +166,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     n_seg = int(round(seconds_per_activity * rate_hz))
     if n_seg < 2:
         raise ValueError(f"seconds_per_activity·rate_hz gives {n_seg} frames; need at least 2")
-    parts = []
+    parts, tempo = [], []
     head = float(heading_rad)
     for name in activities:
         if name not in ACTIVITIES:
@@ -180,6 +181,7 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
             pacer = None if limit is None else Pacer(rig, limit)
             tl = BUILDERS[name](style, rng, seconds_per_activity, label, pace=pacer)
         euler, heading, contact, anchor, heel, lab = tl.sample(n_seg, rate_hz, BASE, head)
+        tempo.append(tl.tempo_factor)
         head = head + sum(k.turn_rad for k in tl.keys)
         parts.append((euler, heading, contact, anchor, heel, lab))
     euler, heading, contact, anchor, heel, lab = (np.concatenate(x) for x in zip(*parts))
@@ -200,7 +202,8 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     transl = ground(rig, local, contact, anchor, heel, foot_yaw, hand_rot, start_xy, balance=balance, rate_hz=rate_hz,
                     seated=seated, swing=walking_frames)
     pose_aa = matrix_to_axis_angle(local).reshape(n, 72)
-    return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz))
+    return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz),
+                 np.array(tempo))
 
 
 def _flat_hands(heading: np.ndarray) -> np.ndarray:

@@ -182,3 +182,18 @@ def test_sit_up_trunk_rises_and_lies_down_without_a_dip():
             assert np.diff(elevation[e:e + 8]).min() > -1.0
         for b in lands:
             assert np.diff(elevation[max(b - 7, 0):b + 2]).max() < 1.0
+
+
+def test_each_activity_reports_how_much_its_keys_were_squeezed():
+    """Track.tempo says, per activity, how long its keys last against the subject's own durations: a sit-up
+    (getting down, a repetition, getting up) squeezed into 8 s runs well under 1, given 30 s it does not; an
+    upright activity that fits stretches by at most MAX_STRETCH."""
+    from sim.motion.activities import MAX_STRETCH
+
+    subject = Subject.random(3)
+    short = person_track(subject, ["sit_up", "squat"], 8.0, RATE, rng=1, model=MODEL)
+    long = person_track(subject, ["sit_up"], 30.0, RATE, rng=1, model=MODEL)
+    assert short.tempo is not None and short.tempo.shape == (2,)
+    assert short.tempo[0] < 0.8
+    assert 0.9 <= long.tempo[0] <= MAX_STRETCH + 1e-9
+    assert short.tempo[1] <= MAX_STRETCH + 1e-9
