@@ -62,9 +62,20 @@ def markdown(report: dict) -> str:
              f"contact physics; variety over {s['spread_subjects']} subjects).", "",
              "| check | measured | range | in range | source |", "|---|---|---|---|---|"]
     for c in report["checks"]:
-        v = "n/a" if c["value"] is None else f"{c['value']:.3g} {c['unit']}"
+        v = "n/a" if c["value"] is None else f"{_shown(c['value'], *c['range'])} {c['unit']}"
         lines.append(f"| {c['what']} | {v} | {c['range'][0]:g}–{c['range'][1]:g} | {'yes' if c['ok'] else '**no**'} | {c['source']} |")
     return "\n".join(lines) + "\n"
+
+
+def _shown(value: float, lo: float, hi: float) -> str:
+    """Three significant digits, or as many more as it takes for the shown number to fall on the same side of
+    the range as the value itself (98.95 against 99–100 is not shown as "99")."""
+    inside = lo <= value <= hi
+    for digits in range(3, 8):
+        text = f"{value:.{digits}g}"
+        if (lo <= float(text) <= hi) == inside:
+            return text
+    return f"{value:.8g}"
 
 
 def write_report(report: dict, out_dir) -> tuple[Path, Path]:

@@ -47,3 +47,13 @@ def test_cli_audit_refuses_too_short_sequences(tmp_path, capsys):
     assert main(["sim", "audit", "--out", str(tmp_path), "--seconds", "2"]) != 0
     assert "--seconds" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+def test_a_value_just_outside_its_range_is_not_shown_rounded_into_it():
+    report = {"settings": {"subjects": 1, "seconds_per_activity": 8.0, "seed": 0, "spread_subjects": 2},
+              "summary": {"in_range": 1, "total": 2},
+              "checks": [{"what": "near miss", "value": 98.95, "unit": "%", "range": [99, 100], "ok": False, "source": "s"},
+                         {"what": "plain", "value": 63.912, "unit": "%", "range": [50, 75], "ok": True, "source": "s"}]}
+    text = markdown(report)
+    assert "| near miss | 98.95 % | 99–100 | **no** |" in text
+    assert "| plain | 63.9 % | 50–75 | yes |" in text
