@@ -41,13 +41,8 @@ def median3x3(p: np.ndarray) -> np.ndarray:
     return med3(lo3, mid3, hi3)
 
 
-def gaussian(p: np.ndarray, sigma_sensels: float) -> np.ndarray:
-    """Separable Gaussian (truncated at 3σ); 'reflect' borders keep the total unchanged."""
-    return ndimage.gaussian_filter(p, sigma_sensels, mode="reflect", truncate=3.0)
-
-
 def gaussian_kernel(sigma_sensels: float, truncate: float = 3.0) -> np.ndarray:
-    """(2r+1,) float64 normalised Gaussian taps, r = ⌊truncate·σ + ½⌋: the kernel ``gaussian`` applies."""
+    """(2r+1,) float64 normalised Gaussian taps, r = ⌊truncate·σ + ½⌋ (ndimage.gaussian_filter's kernel)."""
     radius = int(truncate * sigma_sensels + 0.5)
     x = np.arange(-radius, radius + 1)
     taps = np.exp(-0.5 / (sigma_sensels * sigma_sensels) * x ** 2)
@@ -55,8 +50,9 @@ def gaussian_kernel(sigma_sensels: float, truncate: float = 3.0) -> np.ndarray:
 
 
 def gaussian_with(p: np.ndarray, taps: np.ndarray) -> np.ndarray:
-    """``gaussian`` with its taps computed once (the chain calls it every frame): rows, then columns,
-    the intermediate in p's dtype, as ndimage.gaussian_filter does."""
+    """Separable Gaussian with taps computed once (the chain filters every frame); 'reflect' borders keep
+    the total unchanged. Rows, then columns, the intermediate in p's dtype: ndimage.gaussian_filter's
+    result bit for bit, without its per-call kernel and wrapper cost."""
     out = ndimage.correlate1d(p, taps, axis=0, mode="reflect")
     return ndimage.correlate1d(out, taps, axis=1, output=out, mode="reflect")
 

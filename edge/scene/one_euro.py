@@ -57,12 +57,9 @@ class OneEuroFilter:
         if t <= self._t_s:
             return self._x.copy() if x.ndim else float(self._x)
         dt = t - self._t_s
+        assert self._dx is not None  # set with _x
         with np.errstate(over="ignore", invalid="ignore"):
-            dx = (x - self._x) / dt
-            new_dx = self._dx + smoothing_alpha(self.d_cutoff_hz, dt) * (dx - self._dx)
-            speed = float(np.linalg.norm(new_dx)) if new_dx.ndim else abs(float(new_dx))
-            a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt) if math.isfinite(speed) else 1.0
-            new_x = self._x + a * (x - self._x)
+            new_x, new_dx = self._advance(x, self._x, self._dx, dt)
         if not (np.all(np.isfinite(new_x)) and np.all(np.isfinite(new_dx))):  # e.g. a huge jump over a tiny dt
             self.skipped += 1
             return self._x.copy() if x.ndim else float(self._x)
@@ -81,13 +78,17 @@ class OneEuroFilter:
             return x
         if t <= self._t_s:
             return last
-        dt = t - self._t_s
-        new_dx = self._sdx + smoothing_alpha(self.d_cutoff_hz, dt) * ((x - last) / dt - self._sdx)
-        speed = abs(new_dx)
-        a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt) if math.isfinite(speed) else 1.0
-        new_x = last + a * (x - last)
+        new_x, new_dx = self._advance(x, last, self._sdx, t - self._t_s)
         if not (math.isfinite(new_x) and math.isfinite(new_dx)):  # e.g. a huge jump over a tiny dt
             self.skipped += 1
             return last
         self._sx, self._sdx, self._t_s = new_x, new_dx, t
         return new_x
+
+    def _advance(self, x, last, dx_last, dt: float):
+        """One filter step, for floats or arrays alike: (new estimate, new derivative). The speed of a
+        vector is its Euclidean norm."""
+        new_dx = dx_last + smoothing_alpha(self.d_cutoff_hz, dt) * ((x - last) / dt - dx_last)
+        speed = float(np.linalg.norm(new_dx)) if np.ndim(new_dx) else abs(float(new_dx))
+        a = smoothing_alpha(self.min_cutoff_hz + self.beta * speed, dt) if math.isfinite(speed) else 1.0
+        return last + a * (x - last), new_dx

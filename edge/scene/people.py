@@ -163,8 +163,8 @@ def group_blobs(
     if known:  # a contact stays with its track while the body still reaches it
         body = [bodies[int(priors[i])] for i in known]
         d = np.linalg.norm(centres_m[known] - np.array([b.centre_m for b in body]), axis=1)
-        near = d <= np.array([b.reach_m for b in body])
-        owner[np.array(known)[near]] = priors[np.array(known)[near]]
+        kept = np.array(known)[d <= np.array([b.reach_m for b in body])]
+        owner[kept] = priors[kept]
     _reach(centres_m, forces_n, owner, bodies, group_radius_m)  # a track that lost its footing is found again by the tracker, as a whole
     ages = np.zeros(n) if ages_s is None else np.where(owner == priors, ages_s, 0.0)
     groups: list[tuple[np.ndarray, int]] = []
