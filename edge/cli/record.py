@@ -57,7 +57,10 @@ def run(args: argparse.Namespace) -> int:
                     source.stop()
             if got < args.frames:
                 raise CliError(f"only {got} of {args.frames} frames arrived within {args.timeout} s; nothing written")
-    except OSError as exc:  # the capture could not be completed on disk (full, removed folder): nothing written
+    except OSError as exc:
+        if got < args.frames:
+            raise  # not the file's: what the source raised while recording, as before
+        # every frame was in, the file could not be made durable or renamed (disk full, folder gone): nothing written
         raise CliError(f"cannot write {args.out}: {exc.strerror or exc}") from None
     size = os.path.getsize(args.out)
     print(f"recorded {got} frames, {size} bytes from {args.source} to {args.out}")
