@@ -28,7 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                      "activity alone, plus multi-person scenes when --people allows. Deterministic for a seed.")
     g.add_argument("--out", required=True, help="output folder (must not already hold a dataset)")
     g.add_argument("--subjects", type=int, default=12, help="number of subjects (default 12)")
-    g.add_argument("--seconds-per-activity", type=float, default=10.0, help="seconds of each activity (default 10)")
+    g.add_argument("--seconds-per-activity", type=float, default=10.0,
+                   help="seconds of each activity, at least (default 10): one that needs longer at the person's own "
+                   "tempo (a push-up: getting down, a repetition, getting up) gets it")
     g.add_argument("--people", type=_people, default=(1, 1), help="people per scene, N or LO..HI within 1..3 (default 1)")
     g.add_argument("--grid", type=int, default=96, choices=(96, 48, 32), help="sensels per side (default 96)")
     g.add_argument("--pitch-mm", type=float, default=None, help="sensel pitch; default keeps the 1.83 m carpet (19.05 mm at 96)")
@@ -51,7 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     au.add_argument("--out", default="docs/sim/audit", help="output folder (default docs/sim/audit)")
     au.add_argument("--subjects", type=int, default=3, help="subjects per activity (default 3)")
     au.add_argument("--seconds", type=float, default=8.0,
-                    help="seconds per activity (default 8: what `make model`'s main training set uses)")
+                    help="seconds per activity, at least (default 8: what `make model`'s main training set uses; "
+                         "an activity that needs longer at the person's own tempo gets it, as in datasets)")
     au.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     au.set_defaults(func=run_audit)
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])

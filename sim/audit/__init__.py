@@ -58,7 +58,8 @@ def markdown(report: dict) -> str:
     s = report["settings"]
     lines = [f"# Simulator audit: {report['summary']['in_range']} of {report['summary']['total']} checks in range", "",
              f"`cavatar sim audit --subjects {s['subjects']} --seconds {s['seconds_per_activity']:g} --seed {s['seed']}` "
-             f"({s['subjects']} subjects × every activity × {s['seconds_per_activity']:g} s through the generator's motion and "
+             f"({s['subjects']} subjects × every activity × at least {s['seconds_per_activity']:g} s — longer where the activity "
+             "needs it at the person's own tempo, as datasets give it — through the generator's motion and "
              f"contact physics; variety over {s['spread_subjects']} subjects).", "",
              "| check | measured | range | in range | source |", "|---|---|---|---|---|"]
     for c in report["checks"]:

@@ -171,7 +171,7 @@ def spread_checks(activity, subjects, seconds, seed, body, rate_hz=14.0) -> list
     peaks = []
     for s in range(subjects):
         subj = Subject.random(200 + s, seed * 1000 + 200 + s)
-        tr = person_track(subj, [activity], seconds, rate_hz, rng=np.random.default_rng((seed, 7, s)), model=body)
+        tr = person_track(subj, [activity], seconds, rate_hz, rng=np.random.default_rng((seed, 7, s)), model=body, extend=True)
         ang = np.linalg.norm(tr.pose_aa[:, 3:].reshape(len(tr), 23, 3), axis=-1).sum(1)
         ang = ang - ang[0]
         peaks.append(np.percentile(ang, 95))

@@ -142,7 +142,7 @@ def measure_activity(activity: str, subjects: int, seconds: float, seed: int, ca
     size = carpet.cols * carpet.pitch_m
     for s in range(subjects):
         subj = Subject.random(100 + s, seed * 1000 + 100 + s)
-        track = person_track(subj, [activity], seconds, rate_hz, rng=np.random.default_rng((seed, s)), model=body,
+        track = person_track(subj, [activity], seconds, rate_hz, rng=np.random.default_rng((seed, s)), model=body, extend=True,
                              start_xy=(size / 2, size / 2))
         frames.tempo.append(1.0 if track.tempo is None else float(track.tempo[0]))
         measure_track(frames, carpet, body, tissue, track, regions, s)

@@ -119,7 +119,7 @@ class Renderer:
         subjects = [subject_list[i] for i in plan.subjects]
         size = self.grid * self.pitch_m
         sc = place_scene(scene, subjects, [list(a) for a in plan.activities], plan.seconds_per_activity, self.rate_hz, size,
-                         plan.seed, self.body)
+                         plan.seed, self.body, extend=True)
         n, p_max = sc.num_frames, 3
         pressure = np.zeros((n, self.grid, self.grid), np.float32)
         out = {
@@ -166,8 +166,10 @@ class Renderer:
                 "sequence": np.zeros(n, np.int32), "frame_flags": flags, "fault_mask": fault, **out}
 
 
-def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, size_m, seed, body, attempts: int = 4):
-    """A scene of these people, retrying with new orders and places when they do not fit.
+def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, size_m, seed, body, attempts: int = 4,
+                extend: bool = False):
+    """A scene of these people, retrying with new orders and places when they do not fit
+    (extend: activities take the time they need, ``sim.motion.scene``).
 
     Several large people doing lying activities may not fit a 1.83 m carpet at all; after
     ``attempts`` the error says so (the caller chooses smaller groups).
@@ -177,7 +179,7 @@ def place_scene(scene_fn, subjects, activities, seconds_per_activity, rate_hz, s
         rng = np.random.default_rng((seed, attempt))
         try:
             return scene_fn(subjects, activities, seconds_per_activity, rate_hz, (size_m, size_m), rng, model=body,
-                            tries=40 if len(subjects) == 1 else 10)
+                            tries=40 if len(subjects) == 1 else 10, extend=extend)
         except ValueError as exc:
             last = exc
     raise ValueError(f"{len(subjects)} people doing {activities} did not fit the carpet in {attempts} attempts: {last}")

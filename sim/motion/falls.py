@@ -318,7 +318,10 @@ def on_carpet(ft: FallTrack, carpet_size_m=(1.83, 1.83), rng=None, model=None, m
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     body = body_model(model)
     tr = ft.track
-    pts = body.forward(tr.pose_aa[::3], tr.betas, tr.transl_m[::3], vertices=True)["vertices"][:, ::4, :2].reshape(-1, 2)
+    from scipy.spatial import ConvexHull
+
+    pts = body.forward(tr.pose_aa, tr.betas, tr.transl_m, vertices=True)["vertices"][..., :2].reshape(-1, 2)
+    pts = pts[ConvexHull(pts).vertices]  # every vertex of every frame: a turned extent is reached on the hull
     size = np.asarray(carpet_size_m, float)
     for yaw in rng.uniform(0, 2 * np.pi) + np.arange(24)[rng.permutation(24)] * (np.pi / 12):
         c, s = np.cos(yaw), np.sin(yaw)

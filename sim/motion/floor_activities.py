@@ -46,6 +46,7 @@ def sitting(style, rng, seconds, label, pace=None):
     sit = contacts(BUTT, LF, RF)
 
     def body(tl, left):
+        d0 = tl.duration_s
         _get_down(tl, style, label, sit_bent, sit, BUTT)
 
         def rep(t):
@@ -62,7 +63,7 @@ def sitting(style, rng, seconds, label, pace=None):
             t.add(0.5 * d, styled(p, style, 1.0, sit_bent), sit, BUTT, label=label)
             t.add(uniform(rng, 0.3, 1.0), styled(p, style, 1.0, sit_bent), sit, BUTT, label=label)
             t.add(0.5 * d, sit_bent, sit, BUTT, label=label)
-        repeat(tl, rep, left - 6.4 * style.tempo, rng)
+        repeat(tl, rep, left - (tl.duration_s - d0) - lasts_s(tl, lambda t: _get_up(t, style, label, sit_bent, sit, BUTT)), rng)
         _get_up(tl, style, label, sit_bent, sit, BUTT)
     return standing_frame(style, rng, seconds, label, body, pace=pace)
 

@@ -150,42 +150,68 @@ def _sway(n, rate_hz, style, rng):
     return out
 
 
+MIN_ACTIVITY_S = 3.0  # the least time any activity is given when others need more than their share
+
+
+def share_time(needs_s, total_s: float) -> np.ndarray:
+    """Seconds for each activity of a sequence lasting total_s: an equal share, except that
+    an activity needing more (a push-up: getting down, one repetition and getting up at its
+    own pace) takes it from those with time to spare, never below what they need. Only when
+    the sequence cannot hold every need is everything squeezed alike."""
+    needs = np.maximum(np.asarray(needs_s, float), 1e-3)
+    if needs.sum() >= total_s:
+        return needs * (total_s / needs.sum())
+    alloc = np.maximum(needs, total_s / len(needs))
+    slack = alloc - needs
+    return alloc - slack * ((alloc.sum() - total_s) / max(slack.sum(), 1e-12))
+
+
 def person_track(subject: Subject, activities, seconds_per_activity: float = 10.0, rate_hz: float = DEFAULT_RATE_HZ,
                  rng: np.random.Generator | int | None = None, model: BodyModel | str | None = None,
                  heading_rad: float = 0.0, start_xy=(0.0, 0.0), walk_radius_m: float = 0.6,
-                 walk_line: bool = False) -> Track:
-    """One person doing ``activities`` (names from ACTIVITIES) in order, each for
-    ``seconds_per_activity`` (exactly round(seconds·rate) frames), starting at start_xy
+                 walk_line: bool = False, extend: bool = False, total_s: float | None = None) -> Track:
+    """One person doing ``activities`` (names from ACTIVITIES) in order, starting at start_xy
     facing heading_rad (0: facing −y). Walking goes between random spots within
     walk_radius_m of the start (walk_line: back and forth on one line, as scene() uses with
     others on the carpet). Feet are locked while they bear weight and the body rests on the
-    floor (see sim.motion.ground)."""
+    floor (see sim.motion.ground).
+
+    Length: len(activities)·round(seconds_per_activity·rate) frames, shared by ``share_time``
+    (an activity that needs more than its share at the subject's own tempo takes it from the
+    others); extend: longer where the activities need more in all (a dataset's sequences: the
+    activity gets the time it needs instead of being squeezed); total_s: exactly
+    round(total_s·rate) frames (a scene's people all last as long)."""
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     rig = Rig(body_model(model), subject.betas)
-    style = subject.style
     n_seg = int(round(seconds_per_activity * rate_hz))
     if n_seg < 2:
         raise ValueError(f"seconds_per_activity·rate_hz gives {n_seg} frames; need at least 2")
-    parts, tempo = [], []
-    head = float(heading_rad)
     for name in activities:
         if name not in ACTIVITIES:
             raise ValueError(f"unknown activity {name!r}; expected one of {ACTIVITIES}")
-        label = ACTIVITIES.index(name)
-        # the push-up's hop and the walking gait's heel strike need the person's own amplitude
-        style = subject.style if name in ("push_up", "walking") else _for_activity(subject.style, rng)
-        if name == "walking":
-            tl = walking(style, rng, seconds_per_activity, label, rig, walk_radius_m, head, walk_line)
-        else:
-            limit = VERTICAL_ACC_LIMIT_M_S2.get(name)
-            pacer = None if limit is None else Pacer(rig, limit)
-            tl = BUILDERS[name](style, rng, seconds_per_activity, label, pace=pacer)
-        euler, heading, contact, anchor, heel, lab = tl.sample(n_seg, rate_hz, BASE, head)
+    seeds = rng.integers(2**63, size=len(activities))  # each activity its own draws: its need is measured on them
+    needs = [max(_timeline(name, subject, np.random.default_rng(sd), 1e-3, rig, walk_radius_m, 0.0, walk_line).own_s,
+                 MIN_ACTIVITY_S) for name, sd in zip(activities, seeds)]
+    if total_s is not None:
+        n_total = int(round(total_s * rate_hz))
+    else:
+        n_total = max(n_seg * len(activities), int(np.ceil(sum(needs) * rate_hz)) if extend else 0)
+    ends = np.round(np.cumsum(share_time(needs, n_total / rate_hz)) * rate_hz).astype(int)
+    ends[-1] = n_total
+    frames = np.diff(ends, prepend=0)
+    if frames.min() < 2:
+        raise ValueError(f"{n_total} frames cannot hold {len(activities)} activities; need at least 2 frames each")
+    parts, tempo = [], []
+    head = float(heading_rad)
+    for name, sd, n_act in zip(activities, seeds, frames):
+        tl = _timeline(name, subject, np.random.default_rng(sd), n_act / rate_hz, rig, walk_radius_m, head, walk_line)
+        euler, heading, contact, anchor, heel, lab = tl.sample(int(n_act), rate_hz, BASE, head)
         tempo.append(tl.tempo_factor)
         head = head + sum(k.turn_rad for k in tl.keys)
         parts.append((euler, heading, contact, anchor, heel, lab))
     euler, heading, contact, anchor, heel, lab = (np.concatenate(x) for x in zip(*parts))
     n = len(euler)
+    style = subject.style  # sway and toe-out are the person's (an activity's style differs in amplitude only)
     sway = _sway(n, rate_hz, style, rng)
     # no root sway near a hand contact ("full" then centred: also right for sequences under 9 frames)
     on_hands = np.convolve(contact[:, 2] | contact[:, 3], np.ones(9), "full")[4 : 4 + n] > 0
@@ -204,6 +230,18 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
     pose_aa = matrix_to_axis_angle(local).reshape(n, 72)
     return Track(subject.subject_id, subject.betas.copy(), pose_aa, transl, lab.astype(np.int8), contact, float(rate_hz),
                  np.array(tempo))
+
+
+def _timeline(name, subject: Subject, rng: np.random.Generator, seconds: float, rig: Rig, walk_radius_m: float,
+              heading: float, walk_line: bool):
+    """One activity's keyframe timeline lasting ``seconds`` (the subject's style for it drawn from rng)."""
+    label = ACTIVITIES.index(name)
+    # the push-up's hop and the walking gait's heel strike need the person's own amplitude
+    style = subject.style if name in ("push_up", "walking") else _for_activity(subject.style, rng)
+    if name == "walking":
+        return walking(style, rng, seconds, label, rig, walk_radius_m, heading, walk_line)
+    limit = VERTICAL_ACC_LIMIT_M_S2.get(name)
+    return BUILDERS[name](style, rng, seconds, label, pace=None if limit is None else Pacer(rig, limit))
 
 
 def _flat_hands(heading: np.ndarray) -> np.ndarray:

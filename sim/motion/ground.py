@@ -79,7 +79,19 @@ def ground(rig: Rig, local: np.ndarray, contact: np.ndarray, anchor: np.ndarray,
         limbs.put(*rig.fk(local))
     if com_path is not None:
         _refit_com(limbs, com_path, rate_hz)
+        _lift_after_refit(limbs, sched)
     return transl
+
+
+def _lift_after_refit(limbs: LimbPlacer, sched: Schedule, passes: int = 3) -> None:
+    """Moving the pelvis onto the COM path can bend a deep crouch's knee into the floor (getting
+    up from a push-up): raise the body there, the locked limbs re-solved onto their locks."""
+    rig, local, transl = limbs.rig, limbs.local, limbs.transl
+    for _ in range(passes):
+        g = rig.fk(local)
+        if _lift_above_floor(rig, transl, sched.contact, rig.vertex_z(local, g) + transl[:, 2:3]) < 1e-4:
+            return
+        limbs.put(*rig.fk(local))
 
 
 @dataclass(frozen=True)

@@ -74,6 +74,7 @@ class Timeline:
     keys: list[Key] = field(default_factory=list)
     pace: object = None
     tempo_factor: float = 1.0  # how long the keys last against the subject's own durations (< 1: squeezed to fit)
+    own_s: float = 0.0  # how long the activity lasts at the subject's own (paced) tempo, lead-in and lead-out included
 
     def add(self, dur_s, pose, contact, anchor, heel=(0.0, 0.0), turn_rad=0.0, label=0) -> "Timeline":
         pose, contact = np.asarray(pose, float), np.asarray(contact, bool)

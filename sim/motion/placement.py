@@ -146,6 +146,8 @@ class _People:
     rate_hz: float
     model: BodyModel
     rng: np.random.Generator
+    extend: bool = False
+    total_s: float | None = None  # once set, everybody's track lasts exactly this long
 
     def make(self, k: int, shuffle: bool) -> tuple[Track, np.ndarray]:
         """Person k's track at the origin (shuffle: their activities in a random order) and
@@ -154,13 +156,14 @@ class _People:
         order = list(self.rng.permutation(names)) if shuffle else names
         alone = len(self.subjects) == 1
         track = person_track(self.subjects[k], order, self.seconds_per_activity, self.rate_hz, self.rng, self.model,
-                             heading_rad=0.0, walk_radius_m=0.6 if alone else 0.45, walk_line=not alone)
+                             heading_rad=0.0, walk_radius_m=0.6 if alone else 0.45, walk_line=not alone,
+                             extend=self.extend, total_s=self.total_s)
         return track, _footprints(track, self.model, stride=2)
 
 
 def scene(subjects, activities, seconds_per_activity: float = 10.0, rate_hz: float = DEFAULT_RATE_HZ,
           carpet_size_m=(1.83, 1.83), rng: np.random.Generator | int | None = None, min_gap_m: float = 0.15,
-          margin_m: float = 0.02, model: BodyModel | str | None = None, tries: int = 40) -> Scene:
+          margin_m: float = 0.02, model: BodyModel | str | None = None, tries: int = 40, extend: bool = False) -> Scene:
     """1–3 people on one carpet who never come closer than min_gap_m to each other (top-down:
     the horizontal distance between any vertex of one and any vertex of another, every frame
     and between consecutive frames) and never leave the carpet (every vertex margin_m inside
@@ -175,6 +178,10 @@ def scene(subjects, activities, seconds_per_activity: float = 10.0, rate_hz: flo
     their activities (another timing may fit beside the others; up to 3 times), then the
     placement restarts with new turns and corners. Raises ValueError after ``tries``
     placement attempts in all.
+
+    extend: each activity gets the time it needs at the person's own tempo (``person_track``'s
+    extend); the scene then lasts as long as its longest person, and the others' activities
+    are given that time too (repetitions and pauses fill it).
     """
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     subjects = list(subjects)
@@ -186,8 +193,12 @@ def scene(subjects, activities, seconds_per_activity: float = 10.0, rate_hz: flo
         raise ValueError("one activity sequence per subject, or one sequence for all")
     size = np.asarray(carpet_size_m, float)
     carpet = _Carpet.of(size, min_gap_m, margin_m)
-    people = _People(subjects, acts_list, per_person, seconds_per_activity, rate_hz, body_model(model), rng)
+    people = _People(subjects, acts_list, per_person, seconds_per_activity, rate_hz, body_model(model), rng, extend)
     made = [people.make(k, shuffle=(k > 0 and not per_person)) for k in range(len(subjects))]
+    longest = max(len(t) for t, _ in made)
+    if extend and min(len(t) for t, _ in made) < longest:
+        people.total_s = longest / rate_hz
+        made = [m if len(m[0]) == longest else people.make(k, shuffle=(k > 0 and not per_person)) for k, m in enumerate(made)]
     placed = _arrange(carpet, people, made, rng, max(1, tries))
     if len(placed) < len(subjects):
         raise ValueError(
