@@ -58,9 +58,12 @@ def simulated_day(grid: tuple[int, int], pitch_m: float, seconds: float, seed: i
     cal = calibration_from_truth(sensor, 0.0, device_id=f"bench-day-{seed}")
     # a chunk (one scene: activities and places) as long as the longest segment: placing scenes is the slow part
     longest = {k: max(n for (kind, _, p), n in zip(DAY, sizes) if (kind, p) == k) / RATE_HZ for k in (("active", 1), ("active", 2))}
-    active = {1: LiveCarpet(grid[0], grid[1], 1, seed + 1, pitch_mm=pitch_mm, activities=ACTIVE_1, chunk_s=longest["active", 1]),
-              2: LiveCarpet(grid[0], grid[1], 2, seed + 2, pitch_mm=pitch_mm, activities=ACTIVE_2, chunk_s=longest["active", 2])}
-    still = LiveCarpet(grid[0], grid[1], 1, seed + 3, pitch_mm=pitch_mm, activities=STILL, chunk_s=1.0)
+    # chunks of exactly chunk_s (extend=False): the day's segments are cut by frame count
+    active = {1: LiveCarpet(grid[0], grid[1], 1, seed + 1, pitch_mm=pitch_mm, activities=ACTIVE_1, chunk_s=longest["active", 1],
+                            extend=False),
+              2: LiveCarpet(grid[0], grid[1], 2, seed + 2, pitch_mm=pitch_mm, activities=ACTIVE_2, chunk_s=longest["active", 2],
+                            extend=False)}
+    still = LiveCarpet(grid[0], grid[1], 1, seed + 3, pitch_mm=pitch_mm, activities=STILL, chunk_s=1.0, extend=False)
     next_frame = {1: 0, 2: 0}
     still_chunk = 0
     counts, kinds, people = [], [], []

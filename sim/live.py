@@ -2,9 +2,12 @@
 
 ``LiveCarpet(rows, cols, people, seed)(k)`` returns frame k's raw counts (frames are
 made in order; going back restarts the world). Motion is generated in chunks of
-``chunk_s`` seconds, one activity per person each (each chunk a new scene: the same
+at least ``chunk_s`` seconds, one activity per person each (each chunk a new scene: the same
 people, other activities and places; with several people, lying activities are left
-out — they do not fit together on the carpet), so the stream runs as long as asked. ``truth(k)`` gives the people's true
+out — they do not fit together on the carpet), so the stream runs as long as asked. A chunk
+lasts longer where its activity needs it at the person's own tempo (a push-up or a sit-up
+~17–19 s, sitting ~10 s; ``sim.motion.scene(extend=True)``, as datasets are made); with
+``extend=False`` every chunk lasts exactly ``chunk_s`` and such activities are squeezed into it. ``truth(k)`` gives the people's true
 SMPL parameters for frame k (the demo draws them beside the reconstruction).
 
 This is what ``sim://`` streams through the real wire protocol.
@@ -22,6 +25,7 @@ is not replaced: scenes are then placed here again, as without prefetch (logged 
 
 from __future__ import annotations
 
+import bisect
 import logging
 import multiprocessing
 import weakref
@@ -42,9 +46,11 @@ def live_sensor(seed: int, grid: int = 96, adc_bits: int = 12, pitch_mm: float =
     return CarpetSensor.random(seed, grid=grid, adc_bits=adc_bits, pitch_mm=pitch_mm)
 
 
-def place_chunk(subjects, activities, seed: int, chunk: int, seconds: float, rate_hz: float, size_m: float, body):
+def place_chunk(subjects, activities, seed: int, chunk: int, seconds: float, rate_hz: float, size_m: float, extend: bool,
+                body):
     """The scene of chunk ``chunk``: one activity per person drawn from ``activities`` (lying ones left out
-    with several people), placed on a ``size_m`` carpet; other activities are drawn when they do not fit."""
+    with several people), placed on a ``size_m`` carpet; other activities are drawn when they do not fit
+    (extend: the scene lasts as long as its activities need, at least ``seconds``)."""
     from sim.dataset.generate import place_scene
     from sim.motion import scene
     from sim.motion.falls import SCENARIOS, scenario_scene
@@ -56,7 +62,8 @@ def place_chunk(subjects, activities, seed: int, chunk: int, seconds: float, rat
         if acts[0][0] in SCENARIOS:  # a fall or a look-alike (sim.motion.falls): one person
             return scenario_scene(subjects[0], acts[0][0], seconds, rate_hz, size_m, (seed, chunk, attempt), body)
         try:
-            return place_scene(scene, subjects, acts, seconds, rate_hz, size_m, (seed, chunk, attempt), body, attempts=2)
+            return place_scene(scene, subjects, acts, seconds, rate_hz, size_m, (seed, chunk, attempt), body, attempts=2,
+                               extend=extend)
         except ValueError:
             if attempt == 5:
                 raise
@@ -144,7 +151,8 @@ class _SceneHelper:
 class LiveCarpet:
     def __init__(self, rows: int = 96, cols: int = 96, people: int = 1, seed: int = 0, pitch_mm: float = 19.05,
                  rate_hz: float = 14.0, adc_bits: int = 12, chunk_s: float = 10.0, body: str = "lite",
-                 activities: tuple[str, ...] = PAPER_ACTIVITIES + ("walking",), prefetch: bool = False) -> None:
+                 activities: tuple[str, ...] = PAPER_ACTIVITIES + ("walking",), prefetch: bool = False,
+                 extend: bool = True) -> None:
         from edge.body import BodyModel
         from sim.contact import ContactModel, regional_tissue, subject_mass_kg
         from sim.contact.segments import SegmentMassModel
@@ -156,7 +164,9 @@ class LiveCarpet:
             raise ValueError(f"people must be 0..3, got {people}")
         self.rows, self.cols, self.people, self.seed = rows, cols, people, seed
         self.pitch_m, self.rate_hz = pitch_mm / 1000, rate_hz
-        self.chunk_frames = max(1, int(round(chunk_s * rate_hz)))
+        self.chunk_frames = max(1, int(round(chunk_s * rate_hz)))  # the least (extend) or exact length of a chunk
+        self.extend = extend
+        self._starts = [0]  # first frame of each chunk known so far (extend: chunks differ in length)
         self.activities = activities
         self.body_name = body
         self.body = BodyModel.load(body)
@@ -179,7 +189,7 @@ class LiveCarpet:
 
     def _chunk_args(self, chunk: int) -> tuple:
         return (self.subjects, self.activities, self.seed, chunk, self.chunk_frames / self.rate_hz, self.rate_hz,
-                self.rows * self.pitch_m)
+                self.rows * self.pitch_m, self.extend)
 
     def _chunk(self, chunk: int):
         helper = self._helper
@@ -207,14 +217,29 @@ class LiveCarpet:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def locate(self, k: int) -> tuple[int, int]:
+        """(chunk, frame within it) of frame k. With extend the chunks before k are placed to learn their
+        lengths (they are anyway, as the stream reaches k)."""
+        if not self.extend or not self.subjects:
+            return divmod(k, self.chunk_frames)
+        i = bisect.bisect_right(self._starts, k) - 1
+        while True:
+            n = self._chunk(i).num_frames
+            if k < self._starts[i] + n:
+                return i, k - self._starts[i]
+            if i + 1 == len(self._starts):
+                self._starts.append(self._starts[i] + n)
+            i += 1
+
     def truth(self, k: int) -> list[dict]:
-        """True SMPL parameters of the people in frame k."""
+        """True SMPL parameters of the people in frame k ("scene": the chunk it belongs to)."""
         if not self.subjects:
             return []
-        sc = self._chunk(k // self.chunk_frames)
-        t = min(k % self.chunk_frames, sc.num_frames - 1)
+        chunk, t = self.locate(k)
+        sc = self._chunk(chunk)
+        t = min(t, sc.num_frames - 1)
         return [{"subject_id": tr.subject_id, "pose_aa": tr.pose_aa[t], "betas": tr.betas, "transl_m": tr.transl_m[t],
-                 "activity": tr.activity_names[t]} for tr in sc.tracks]
+                 "activity": tr.activity_names[t], "scene": chunk} for tr in sc.tracks]
 
     def pressure_kpa(self, k: int) -> np.ndarray:
         total = np.zeros((self.rows, self.cols), np.float32)

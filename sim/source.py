@@ -82,7 +82,8 @@ OPTIONS: dict[str, tuple[Any, Any, str]] = {
     "speed": (float, 1.0, "1 = real time, 0 = as fast as possible"),
     "faults": (bool, False, "inject line noise now and then (bit flips, garbage, torn frames)"),
     "scene_s": (_positive("scene_s", "seconds"), 10.0,
-                "seconds of each simulated scene (bodies world): then new activities and places"),
+                "least seconds of each simulated scene (bodies world; longer where an activity needs it at the "
+                "person's own tempo, e.g. a push-up ~18 s): then new activities and places"),
     "activities": (_activities, "", "comma-separated activities and fall scenarios drawn per scene (bodies world; "
                    "default: the paper's ten and walking), e.g. fall_forward,lie_down"),
 }

@@ -38,7 +38,7 @@ class Scene:
     people: int
     seed: int
     seconds: float
-    scene_s: float = 10.0  # the virtual carpet's scene length: then other activities, other places
+    scene_s: float = 10.0  # the virtual carpet's least scene length (longer where an activity needs it): then others
 
     @property
     def name(self) -> str:
@@ -61,7 +61,6 @@ class SceneRun:
     kinds: list[str] = field(default_factory=list)  # per frame: people, empty, unconfirmed, invalid, lost
     frame_ms: list[float | None] = field(default_factory=list)  # per frame: the pipeline's milliseconds
     truth: list[list[dict]] = field(default_factory=list)  # per frame: the true people (see sim.live)
-    chunk_frames: int = 140
     calibration: str = ""
     runtime_s: float = 0.0
     model: str = ""
@@ -111,7 +110,7 @@ def capture(scene: Scene, work: Path, calibration: str = "installer", config: An
     work.mkdir(parents=True, exist_ok=True)
     for old in (work / f"{scene.name}.bodies.jsonl", work / f"{scene.name}.status.json"):
         old.unlink(missing_ok=True)  # a fresh run: seq from 0, no records of an earlier one
-    run = SceneRun(scene, "failed", chunk_frames=max(1, int(round(scene.scene_s * RATE_HZ))))
+    run = SceneRun(scene, "failed")
     try:
         cfg = _config(scene, work, calibration, config)
     except ValueError as exc:  # a bad --config or calibration path: the whole score stops, said plainly

@@ -74,9 +74,9 @@ def _people(clip: Clip, body, rng):
     if clip.kind == "pet":
         return [], {"scenario": "pet", "fall": False}, clip.seconds
     acts = [clip.what] if clip.kind == "activity" else ["standing"]
-    sc = scene([subject], acts, clip.seconds, RATE_HZ, (size, size), rng, model=body)
+    sc = scene([subject], acts, clip.seconds, RATE_HZ, (size, size), rng, model=body, extend=True)  # as the live carpet
     tr = sc.tracks[0]
-    return [(tr, np.ones(len(tr)))], {"scenario": clip.what, "fall": False}, clip.seconds
+    return [(tr, np.ones(len(tr)))], {"scenario": clip.what, "fall": False}, len(tr) / RATE_HZ
 
 
 class BoardPath:

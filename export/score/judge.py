@@ -29,9 +29,8 @@ FRAME_KEYS = ("true", "published", "extra", "missed", "switches", "frame_ms")
 def judge(run: SceneRun, body, threshold_m: float) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """(per-frame columns, per-true-person-frame columns) of one captured scene."""
     seq = []
-    for k, (truth, pub) in enumerate(zip(run.truth, run.published)):
-        chunk = k // run.chunk_frames
-        seq.append(({(chunk, t["subject_id"]): t["transl_m"][:2] for t in truth},
+    for truth, pub in zip(run.truth, run.published):  # a true person is (scene, subject): each scene places people anew
+        seq.append(({(t["scene"], t["subject_id"]): t["transl_m"][:2] for t in truth},
                     {p["track_id"]: p["transl_m"][:2] for p in pub}))
     mot = clear_mot(seq, threshold_m)
     frames = {
@@ -47,13 +46,12 @@ def judge(run: SceneRun, body, threshold_m: float) -> tuple[dict[str, np.ndarray
     rows = {"activity": [], "matched": [], "mpjpe_m": [], "pa_mpjpe_m": [], "local_mpjpe_m": [], "heading_rad": [],
             "transl_m": [], "activity_ok": []}
     pred, true = [], []
-    for k, (truth, pub, fm) in enumerate(zip(run.truth, run.published, mot.frames)):
-        chunk = k // run.chunk_frames
+    for truth, pub, fm in zip(run.truth, run.published, mot.frames):
         partner = {t: p for t, p, _ in fm.pairs}
         by_track = {p["track_id"]: p for p in pub}
         for t in truth:
             rows["activity"].append(t["activity"])
-            p = by_track.get(partner.get((chunk, t["subject_id"])))
+            p = by_track.get(partner.get((t["scene"], t["subject_id"])))
             rows["matched"].append(p is not None)
             rows["activity_ok"].append(p is not None and p["activity"] == t["activity"])
             if p is not None:

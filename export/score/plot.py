@@ -38,11 +38,12 @@ def timeline_png(result: dict[str, Any], out_png: Path) -> Path:
         te = np.append(t, len(t) / rate)  # each frame drawn over its whole interval
         ax.step(te, np.append(true, true[-1:]), where="post", color="black", lw=2.2, label="true")
         ax.step(te, np.append(pub, pub[-1:]), where="post", color="tab:red", lw=1.1, label="published")
-        chunk = scenes[name]["scene_s"]
-        for x in np.arange(chunk, t[-1] if len(t) else 0, chunk):
+        starts = result["timeline"][name].get("chunk_starts_s", [])
+        ends = starts[1:] + [len(t) / rate]
+        for x in starts[1:]:
             ax.axvline(x, color="0.6", lw=0.6, ls=":")
-        for i, acts in enumerate(result["timeline"][name].get("chunk_activities", [])):
-            x = min((i + 0.5) * chunk, (i * chunk + t[-1]) / 2 if len(t) else 0)
+        for a, b, acts in zip(starts, ends, result["timeline"][name].get("chunk_activities", [])):
+            x = (a + b) / 2
             ax.text(x, top + 0.9, ", ".join(a.replace("_", "-") for a in acts), ha="center", va="top", fontsize=7,
                     color="0.25")
         s = scenes[name].get("summary") or {}

@@ -2,9 +2,10 @@
 
 - ``quick`` (tests, a first look: seconds): one person, one 5-second scene.
 - ``standard`` (the committed score, ``make score``): one person on three carpets for 40 s each
-  (four 10-s scenes per carpet; seeds 2, 9 and 109 draw all eleven live activities between
-  them, lying ones included: sit-up on 2, push-up on 9), two people and three people on two
-  carpets each for 30 s (lying activities are left out with several people).
+  (scenes of at least 10 s, longer where an activity needs it: seed 2's sit-up lasts ~20 s;
+  seeds 2, 9 and 109 draw ten of the live activities between them, lying ones included:
+  sit-up on 2, push-up on 9), two people and three people on two carpets each for 30 s (lying
+  activities are left out with several people).
 
 Seeds were chosen from what the virtual carpet draws (``sim.live.place_chunk``: the activities
 of scene c of seed s come from ``default_rng((s, c))``) and kept only where every scene can be

@@ -32,21 +32,25 @@ def machine() -> dict[str, Any]:
             "load_average_1_5_15_min": [round(x, 2) for x in os.getloadavg()]}
 
 
-def chunk_activities(run) -> list[list[str]]:
-    """Per simulated scene (chunk) of ``run``, each person's activity: the most frequent one of its
-    frames other than the "standing" a scene starts from (standing only when it is all there is)."""
+def chunk_activities(run) -> tuple[list[int], list[list[str]]]:
+    """(first frame, each person's activity) per simulated scene (chunk) of ``run``, in order: the most
+    frequent activity of a person's frames other than the "standing" a scene starts from (standing only
+    when it is all there is). Scenes differ in length: each lasts as long as its activities need."""
+    starts: list[int] = []
+    per_scene: dict[int, dict[int, Counter]] = {}
+    for k, truth in enumerate(run.truth):
+        for t in truth:
+            if t["scene"] not in per_scene:
+                starts.append(k)
+            per_scene.setdefault(t["scene"], {}).setdefault(t["subject_id"], Counter())[t["activity"]] += 1
     out = []
-    for start in range(0, len(run.truth), run.chunk_frames):
-        per_subject: dict[int, Counter] = {}
-        for truth in run.truth[start:start + run.chunk_frames]:
-            for t in truth:
-                per_subject.setdefault(t["subject_id"], Counter())[t["activity"]] += 1
+    for subjects in per_scene.values():
         labels = []
-        for counts in per_subject.values():
+        for counts in subjects.values():
             moving = Counter({a: n for a, n in counts.items() if a != "standing"})
             labels.append((moving or counts).most_common(1)[0][0])
         out.append(sorted(labels))
-    return out
+    return starts, out
 
 
 def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, calibration: str = "installer",
@@ -74,8 +78,9 @@ def score_scenes(scenes: Iterable[Scene], work: Path, threshold_m: float = 0.5, 
             entry["activities"] = sorted({a for acts in frames["activities"] for a in acts})
             entry["kinds"] = {k: frames["kind"].count(k) for k in sorted(set(frames["kind"]))}
             entry["summary"] = summarise([(scene, frames, persons)], RATE_HZ)["overall"]
+            starts, acts = chunk_activities(run)
             timeline[scene.name] = {"true": frames["true"].tolist(), "published": frames["published"].tolist(),
-                                    "chunk_activities": chunk_activities(run)}
+                                    "chunk_starts_s": [round(k / RATE_HZ, 3) for k in starts], "chunk_activities": acts}
             s = entry["summary"]
             say(f"score: {scene.name} {run.status}: count right {s['count_right_pct']} %, extra-track frames "
                 f"{s['extra_frames_pct']} %, MOTA {s['mota_pct']} %, MPJPE {s['mpjpe_cm']} cm ({run.runtime_s:.0f} s)")

@@ -9,7 +9,7 @@ the others' (dilated by the gap) is zero, found for every shift at once by FFT.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import fft as sfft
@@ -197,7 +197,7 @@ def scene(subjects, activities, seconds_per_activity: float = 10.0, rate_hz: flo
     made = [people.make(k, shuffle=(k > 0 and not per_person)) for k in range(len(subjects))]
     longest = max(len(t) for t, _ in made)
     if extend and min(len(t) for t, _ in made) < longest:
-        people.total_s = longest / rate_hz
+        people = replace(people, total_s=longest / rate_hz)
         made = [m if len(m[0]) == longest else people.make(k, shuffle=(k > 0 and not per_person)) for k, m in enumerate(made)]
     placed = _arrange(carpet, people, made, rng, max(1, tries))
     if len(placed) < len(subjects):

@@ -54,7 +54,7 @@ def test_the_virtual_carpet_streams_a_fall_scenario(body):
     from sim.live import place_chunk
     from sim.motion import Subject as S
 
-    sc = place_chunk([S.random(0, 1)], ("fall_backward",), 1, 0, 20.0, RATE, 1.83, body)
+    sc = place_chunk([S.random(0, 1)], ("fall_backward",), 1, 0, 20.0, RATE, 1.83, True, body)  # a scenario keeps its length
     assert sc.num_frames == int(20 * RATE)
     z = sc.tracks[0].transl_m[:, 2]
     assert z[0] > 0.8 and z[-1] < 0.3

@@ -31,3 +31,23 @@ def test_sim_url_streams_simulated_bodies():
         info = source.info
     assert all(f is not None and f.counts.shape == (96, 96) for f in frames)
     assert info.sign in (-1, 1) and info.adc_bits == 12
+
+
+def test_a_scene_lasts_as_long_as_its_activity_needs():
+    """A sit-up (getting down, a repetition, getting up at the person's pace: ~17 s) is not squeezed into a
+    5-s scene: its scene lasts longer; frames find their scene whichever way the stream goes."""
+    from sim.motion import ACTIVITIES
+
+    c = LiveCarpet(people=1, seed=2, activities=("sit_up", "stepping"), chunk_s=5.0)
+    starts = [k for k in range(500) if c.locate(k)[1] == 0]
+    lengths = np.diff(starts)
+    assert len(lengths) >= 2 and lengths.min() >= c.chunk_frames
+    kinds = [c.truth(s + 40)[0]["activity"] for s in starts[:-1]]
+    assert "sit_up" in kinds and "stepping" in kinds
+    for start, n, kind in zip(starts, lengths, kinds):
+        assert (n > 12 * c.rate_hz) == (kind == "sit_up")  # only the sit-up needs more than 5 s
+        assert c.truth(start)[0]["scene"] == c.truth(start + n - 1)[0]["scene"] == c.locate(start)[0]
+    first = c.truth(3)[0]  # going back: the same scene again
+    assert first["scene"] == 0 and ACTIVITIES.index(first["activity"]) >= 0
+    exact = LiveCarpet(people=1, seed=2, activities=("sit_up", "stepping"), chunk_s=5.0, extend=False)
+    assert [exact.locate(k) for k in (0, 69, 70, 141)] == [(0, 0), (0, 69), (1, 0), (2, 1)]

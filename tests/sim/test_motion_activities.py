@@ -205,3 +205,14 @@ def test_each_activity_reports_how_much_its_keys_were_squeezed():
     assert extended.tempo is not None and 0.9 <= extended.tempo[0] <= MAX_STRETCH + 1e-9 and len(extended) > len(alone)
     exact = person_track(subject, ["sit_up", "squat"], 8.0, RATE, rng=1, model=MODEL, total_s=30.0)
     assert len(exact) == round(30.0 * RATE)
+
+
+def test_an_extended_scene_gives_everyone_the_longest_need():
+    """scene(extend=True): the sitter needs ~10 s to sit down, sit and get up at their own pace; the person
+    stepping beside them is given as long (their steps and pauses fill it), so both tracks are equal."""
+    sc = scene([Subject.random(21), Subject.random(22)], [["sitting"], ["stepping"]], 4.0, RATE, rng=3, model=MODEL,
+               extend=True)
+    a, b = sc.tracks
+    assert len(a) == len(b) == sc.num_frames > 8 * RATE
+    assert a.tempo is not None and b.tempo is not None and a.tempo[0] >= 0.9 and b.tempo[0] >= 0.9
+    assert (b.activity == ACTIVITIES.index("stepping")).sum() > 4 * RATE

@@ -27,7 +27,10 @@ def test_one_person_doing_any_activity_is_one_track(activity, seed):
     applier = Applier(calibration_from_truth(carpet.sensor, t_s=0.0))
     tracker = SceneTracker(96, 96, carpet.pitch_m, SceneConfig())
     published, doing = [], set()
-    for k in range(carpet.chunk_frames):
+    n = carpet.chunk_frames
+    while carpet.locate(n - 1)[0] == 0 and carpet.locate(n)[0] == 0:  # the first scene, as long as the activity needs
+        n += 1
+    for k in range(n):
         doing.add(carpet.truth(k)[0]["activity"])
         out = tracker.update(applier.apply(carpet(k)).pressure_kpa, k / carpet.rate_hz)
         published.append(tuple(sorted(p.track_id for p in out.people)))

@@ -19,13 +19,14 @@ def body():
     return BodyModel.load("lite")
 
 
-def _person(sid, x, act="squat", turn=0.0):
+def _person(sid, x, act="squat", turn=0.0, scene=0):
     from scipy.spatial.transform import Rotation
 
     pose = np.zeros(72)
     pose[:3] = (Rotation.from_rotvec([0, 0, turn]) * Rotation.from_rotvec(UPRIGHT)).as_rotvec()
     pose[3 * 5] = 0.4  # a bent knee
-    return {"subject_id": sid, "pose_aa": pose, "betas": np.zeros(10), "transl_m": np.array([x, 0.9, 0.9]), "activity": act}
+    return {"subject_id": sid, "pose_aa": pose, "betas": np.zeros(10), "transl_m": np.array([x, 0.9, 0.9]), "activity": act,
+            "scene": scene}
 
 
 def _published(track, truth, act=None, turn=0.0):
@@ -34,10 +35,10 @@ def _published(track, truth, act=None, turn=0.0):
             "betas": p["betas"].tolist(), "activity": act or truth["activity"], "confidence": 0.9}
 
 
-def _run(truth, published, people=1, chunk_frames=140):
+def _run(truth, published, people=1):
     n = len(truth)
     return SceneRun(Scene(people, 0, n / 14), "scored", published=published, kinds=["people"] * n,
-                    frame_ms=[5.0] * n, truth=truth, chunk_frames=chunk_frames)
+                    frame_ms=[5.0] * n, truth=truth)
 
 
 def test_published_equal_to_truth_scores_perfectly(body):
@@ -70,9 +71,8 @@ def test_extra_miss_turn_and_wrong_activity_are_counted(body):
 
 def test_a_new_scene_is_a_new_identity(body):
     """At a scene boundary the simulator moves people: a new track id there is no identity switch."""
-    truth = [[_person(0, 0.5)], [_person(0, 0.5)], [_person(0, 1.5)], [_person(0, 1.5)]]
-    pub = [[_published(1, truth[0][0])], [_published(1, truth[1][0])], [_published(2, truth[2][0])], [_published(2, truth[3][0])]]
-    frames, _ = judge(_run(truth, pub, chunk_frames=2), body, 0.5)
-    assert frames["switches"].sum() == 0
-    frames, _ = judge(_run(truth, pub, chunk_frames=140), body, 0.5)
-    assert frames["switches"].sum() == 1
+    for scenes, switches in (((0, 0, 1, 1), 0), ((0, 0, 0, 0), 1)):
+        truth = [[_person(0, x, scene=s)] for x, s in zip((0.5, 0.5, 1.5, 1.5), scenes)]
+        pub = [[_published(track, t[0])] for track, t in zip((1, 1, 2, 2), truth)]
+        frames, _ = judge(_run(truth, pub), body, 0.5)
+        assert frames["switches"].sum() == switches
