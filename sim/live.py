@@ -1,14 +1,15 @@
 """The virtual carpet, live: simulated people → contact → sensor, one frame at a time.
 
 ``LiveCarpet(rows, cols, people, seed)(k)`` returns frame k's raw counts (frames are
-made in order; going back restarts the world). Motion is generated in chunks of
-at least ``chunk_s`` seconds, one activity per person each (each chunk a new scene: the same
-people, other activities and places; with several people, lying activities are left
-out — they do not fit together on the carpet), so the stream runs as long as asked. A chunk
+made in order; going back restarts the world). Motion is generated in chunks of at least
+``chunk_s`` seconds, one activity per person each (each chunk a new scene: the same people,
+other activities and places; with several people, lying activities are left out — they do
+not fit together on the carpet), so the stream runs as long as asked. A chunk
 lasts longer where its activity needs it at the person's own tempo (a push-up or a sit-up
 ~17–19 s, sitting ~10 s; ``sim.motion.scene(extend=True)``, as datasets are made); with
-``extend=False`` every chunk lasts exactly ``chunk_s`` and such activities are squeezed into it. ``truth(k)`` gives the people's true
-SMPL parameters for frame k (the demo draws them beside the reconstruction).
+``extend=False`` every chunk lasts exactly ``chunk_s`` and such activities are squeezed into it.
+``locate(k)`` gives frame k's chunk; ``truth(k)`` the people's true SMPL parameters for frame k
+(the demo draws them beside the reconstruction).
 
 This is what ``sim://`` streams through the real wire protocol.
 
