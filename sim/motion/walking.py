@@ -25,6 +25,9 @@ def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0
     _, g = rig.fk(local)
     step = abs(g[0, J["left_ankle"], 1] - g[0, J["right_ankle"], 1])
     a = style.amplitude
+    arm_swing = uniform(rng, *ARM_SWING)  # people swing their arms anywhere from barely to briskly
+    for shoulder in ("left_shoulder", "right_shoulder"):
+        ds[J[shoulder], 0] *= arm_swing
     ds, mid = styled(ds, style, a), styled(mid, style, a)
     tl = Timeline()
     lead = min(uniform(rng, 0.3, 0.7), 0.15 * seconds)
@@ -87,6 +90,7 @@ def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0
     return tl
 
 
+ARM_SWING = (0.4, 1.8)  # per walk: the shoulders' swing against the template's ±15° (gait studies: ~5–35°)
 HEEL_STRIKE_DEG = 15.0  # toes up at heel strike (the foot is flat by mid-stance)
 CLOSE_STRIKE_DEG = 8.0  # a short closing step lands on its heel too, toes a little up
 PRE_SWING_KNEE_DEG = 35.0  # the trailing knee at toe-off (gait studies: ~35–40°)
