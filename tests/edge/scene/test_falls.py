@@ -242,3 +242,15 @@ def test_stepping_forward_and_standing_still_is_not_lying():
     ev, _ = run([(2.0, [body([1], a, **feet)]), (0.5, [body([1], a + (0.3, 0.0), **feet)]),
                  (20.0, [body([1], a + (0.6, 0.0), **feet)])])
     assert ev == []
+
+
+def test_a_heavy_person_standing_is_on_their_feet_and_their_fall_is_seen():
+    """A heavy person's feet can read 0.052 m² at 17.5 kPa (tuning fall_sideways-s3): that is feet, not a body
+    lying (lying reads ≈ 4–9 kPa) — so they are not "on the floor" from the start, and their fall is judged."""
+    a = np.array([0.36, 1.13])
+    heavy_feet = dict(force_n=903.0, area_m2=0.052, length_m=0.69)
+    ev, _ = run([(5.0, [body([1], a, **heavy_feet)])])
+    assert ev == []
+    ev, _ = run([(3.0, [body([1], a, **heavy_feet)]), (0.5, [body([1], a, force_n=440.0, area_m2=0.025, length_m=0.3)]),
+                 (34.0, [body([1, 2], (0.86, 0.67), force_n=1419.0, area_m2=0.18, length_m=1.84)])])
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]

