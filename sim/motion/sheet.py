@@ -25,7 +25,7 @@ def draw_activity(path, activity: str, subject_id: int = 3, seed: int = 1, momen
     from edge.body.render import draw_view
 
     lite = BodyModel.load("lite")
-    track = person_track(Subject.random(subject_id), [activity], seconds, 14.0, rng=seed, model=lite)
+    track = person_track(Subject.random(subject_id), [activity], seconds, 14.0, rng=seed, model=lite, extend=True)
     model = lite if model_name == "lite" else BodyModel.load(model_name)
     inside = np.flatnonzero(np.asarray(track.activity) == ACTIVITIES.index(activity))
     if len(inside) < moments:
