@@ -41,12 +41,7 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
     """Seconds from the last stance nearby to landing at start_t, judged from where the landed body ``b``
     lies (see the module doc of edge.scene.falls); None: no fall-like arrival. ``standing``: one of the body's
     tracks has stood on its feet for a while (someone beside a dropped bag or a pet lying down)."""
-    near = [r for r in feet if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
-    runs: list[list] = []  # stances, newest first: stretches of on-the-feet readings without a gap
-    for r in reversed(near):
-        if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
-            runs.append([])
-        runs[-1].append(r)
+    runs = stances(feet, start_t, b.centre_m, c)
     landed = landed_length_m if np.isfinite(landed_length_m) else b.length_m
     for run in runs:
         end_t = run[0][0]
@@ -65,21 +60,30 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
     return None
 
 
+def stances(feet: Sequence[Reading], start_t: float, centre_m: np.ndarray, c: FallConfig) -> list[list]:
+    """The stances before start_t within fall_radius_m of centre_m, newest first, each newest first: stretches of
+    on-the-feet readings without a gap longer than RUN_GAP_S."""
+    runs: list[list] = []
+    for r in reversed(feet):
+        if r[0] >= start_t or np.linalg.norm(r[1] - centre_m) > c.fall_radius_m:
+            continue
+        if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
+            runs.append([])
+        runs[-1].append(r)
+    return runs
+
+
 def supported(feet: Sequence[Reading], start_t: float, touch_m: np.ndarray, b: BodyFeatures, c: FallConfig) -> bool:
     """A descent under control (a push-up from a crouch, lying back from sitting): the last reading on the feet
     came just before the first touch (within RUN_GAP_S) at the end of a stance of SUPPORTED_STANCE_S, the centre
     of pressure slid from it to where the body first touched (``touch_m``, at most SUPPORTED_JUMP_M) and it still
     carried at least SUPPORTED_LOAD of the load ``b`` now lying. A falling body unloads its feet and lands its
     trunk away from them."""
-    near = [r for r in feet if r[0] < start_t and np.linalg.norm(r[1] - b.centre_m) <= c.fall_radius_m]
-    if not near or start_t - near[-1][0] > RUN_GAP_S:
+    runs = stances(feet, start_t, b.centre_m, c)
+    if not runs or start_t - runs[0][0][0] > RUN_GAP_S:
         return False
-    last, first = near[-1], near[-1][0]
-    for r in reversed(near[:-1]):  # back to the start of the stance the last reading ends
-        if first - r[0] > RUN_GAP_S:
-            break
-        first = r[0]
-    return (last[0] - first >= SUPPORTED_STANCE_S and float(np.linalg.norm(touch_m - last[1])) <= SUPPORTED_JUMP_M
+    last = runs[0][0]
+    return (last[0] - runs[0][-1][0] >= SUPPORTED_STANCE_S and float(np.linalg.norm(touch_m - last[1])) <= SUPPORTED_JUMP_M
             and last[2] >= SUPPORTED_LOAD * b.force_n)
 
 
@@ -116,4 +120,4 @@ def seated(run: Sequence[Reading], b: BodyFeatures, c: FallConfig) -> bool:
     return best >= c.seated_s and b.force_n >= c.seated_load_ratio * usual
 
 
-__all__ = ["RUN_GAP_S", "SUPPORTED_LOAD", "arrival", "collapsed", "seated", "supported"]
+__all__ = ["RUN_GAP_S", "SUPPORTED_LOAD", "arrival", "collapsed", "seated", "stances", "supported"]

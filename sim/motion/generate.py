@@ -190,8 +190,11 @@ def person_track(subject: Subject, activities, seconds_per_activity: float = 10.
         if name not in ACTIVITIES:
             raise ValueError(f"unknown activity {name!r}; expected one of {ACTIVITIES}")
     seeds = rng.integers(2**63, size=len(activities))  # each activity its own draws: its need is measured on them
-    needs = [max(_timeline(name, subject, np.random.default_rng(sd), 1e-3, rig, walk_radius_m, 0.0, walk_line).own_s,
-                 MIN_ACTIVITY_S) for name, sd in zip(activities, seeds)]
+    if len(activities) > 1 or (extend and total_s is None):  # (one activity of a set length takes it all anyway)
+        needs = [max(_timeline(name, subject, np.random.default_rng(sd), 1e-3, rig, walk_radius_m, 0.0,
+                               walk_line).own_s, MIN_ACTIVITY_S) for name, sd in zip(activities, seeds)]
+    else:
+        needs = [MIN_ACTIVITY_S]
     if total_s is not None:
         n_total = int(round(total_s * rate_hz))
     else:

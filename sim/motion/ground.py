@@ -91,7 +91,7 @@ def _lift_after_refit(limbs: LimbPlacer, sched: Schedule, passes: int = 3) -> No
         g = rig.fk(local)
         if _lift_above_floor(rig, transl, sched.contact, rig.vertex_z(local, g) + transl[:, 2:3]) < 1e-4:
             return
-        limbs.put(*rig.fk(local))
+        limbs.put(*g)  # the lift moved transl only: the FK of local still holds
 
 
 @dataclass(frozen=True)
