@@ -218,7 +218,7 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
     from sim.motion import ACTIVITIES
     from sim.motion import Subject as MotionSubject
 
-    _check_arguments(people, activities, calibration)
+    _check_arguments(people, activities, calibration, seconds_per_activity, rate_hz)
     rng = np.random.default_rng(seed)
     motion_subjects = [MotionSubject.random(i, seed * 1000 + i) for i in range(subjects)]
     splits = split_subjects(subjects, rng)
@@ -252,12 +252,15 @@ def generate(out_dir: str | Path, *, subjects: int = 12, seconds_per_activity: f
     return Path(out_dir)
 
 
-def _check_arguments(people: tuple[int, int], activities: tuple[str, ...], calibration: str | None) -> None:
+def _check_arguments(people: tuple[int, int], activities: tuple[str, ...], calibration: str | None,
+                     seconds_per_activity: float, rate_hz: float) -> None:
     from sim.dataset.calibrate import METHODS
     from sim.motion import ACTIVITIES
 
     if not 1 <= people[0] <= people[1] <= 3:
         raise ValueError(f"people must be a range within 1..3, got {people}")
+    if not round(seconds_per_activity * rate_hz) >= 2:  # (every sequence would be skipped: 0 frames written)
+        raise ValueError(f"seconds per activity must give at least 2 frames at {rate_hz:g} Hz, got {seconds_per_activity:g} s")
     if calibration is not None and calibration not in METHODS:
         raise ValueError(f"calibration must be one of {METHODS}, got {calibration!r}")
     unknown = [a for a in activities if a not in ACTIVITIES]

@@ -63,6 +63,9 @@ def test_cli_generate_and_show(tmp_path, capsys):
     assert "outside 0.." in capsys.readouterr().err
     assert main(["sim", "generate", "--out", str(tmp_path / "d"), "--subjects", "1", "--activities", "flying"]) == 2
     assert "unknown activities ['flying']" in capsys.readouterr().err
+    too_short = tmp_path / "e"  # every sequence would be skipped: an error, not an empty dataset
+    assert main(["sim", "generate", "--out", str(too_short), "--subjects", "1", "--seconds-per-activity", "0.05"]) == 2
+    assert "at least 2 frames" in capsys.readouterr().err and not too_short.exists()
     assert main(["sim", "generate", "--out", str(out), "--subjects", "1", "--activities", "squat"]) == 2
     assert "already holds a dataset" in capsys.readouterr().err
 
