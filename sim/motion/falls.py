@@ -37,6 +37,7 @@ from sim.motion.activities import ACTIVITIES, mirror
 from sim.motion.floor_activities import SIT_BENT, SIT_LONG
 from sim.motion.generate import DEFAULT_RATE_HZ, Subject, Track, body_model, person_track
 from sim.motion.keys import BASE, Timeline, pose
+from sim.motion.rest import settle
 from sim.motion.rig import UPRIGHT, J, rot_z
 
 FALLS = ("fall_forward", "fall_backward", "fall_sideways", "walk_fall_forward", "walk_fall_sideways",
@@ -84,28 +85,6 @@ PICK = pose(root=(70, 0, 0), left_hip=(-80, 2, -3), right_hip=(-80, -2, 3), left
             spine1=(10, 0, 0), spine2=(10, 0, 0), left_shoulder=(-95, 0, -80), right_shoulder=(-95, 0, 80))
 
 
-_SETTLED: dict[bytes, np.ndarray] = {}
-
-
-def settle(p: np.ndarray, model=None) -> np.ndarray:
-    """A lying pose turned (root tilt and roll within ±30°) to where its pelvis lies lowest: a body left
-    on the floor comes to rest on its hip, shoulder and thigh, not balanced on a foot and a hand."""
-    key = p.tobytes()
-    if key not in _SETTLED:
-        body = body_model(model)
-        d = np.arange(-30, 31, 5.0)
-        cand = np.repeat(p[None], len(d) ** 2, axis=0)
-        cand[:, 0, 0] += np.repeat(d, len(d))
-        cand[:, 0, 2] += np.tile(d, len(d))
-        local = euler_xyz_deg_to_matrix(cand)
-        local[:, 0] = UPRIGHT @ local[:, 0]
-        out = body.forward(matrix_to_axis_angle(local).reshape(len(cand), 72), None, None, vertices=True)
-        height = out["joints"][:, 0, 2] - out["vertices"][:, :, 2].min(axis=1)  # the pelvis above the floor
-        turn = np.abs(cand[:, 0, 0] - p[0, 0]) + np.abs(cand[:, 0, 2] - p[0, 2])
-        _SETTLED[key] = cand[int(np.argmin(height + 0.0004 * turn))]  # no turn for less than ~1 cm
-    return _SETTLED[key].copy()
-
-
 @dataclass
 class FallTrack:
     """One scenario: its Track, the truth and the share of the weight on the carpet per frame."""
@@ -117,9 +96,11 @@ class FallTrack:
 
 
 class _Script:
-    """A timeline plus the per-key anchor and weight share, and named instants."""
+    """A timeline plus the per-key anchor and weight share, and named instants; ``rest(p)`` settles a
+    pose on the floor for this subject (``settle``)."""
 
-    def __init__(self) -> None:
+    def __init__(self, rest) -> None:
+        self.rest = rest
         self.tl = Timeline()
         self.anchor: list[int] = []
         self.load: list[float] = []
@@ -151,7 +132,7 @@ def _lie_still(s: _Script, p, rng, lie_s: float, label=_STANDING) -> None:
 def _get_up(s: _Script, rng, tempo: float, prone: bool = False) -> None:
     """From lying: to sitting (from the front: onto hands and knees), to kneeling, to standing (about 5 s)."""
     if not prone:
-        s.add(1.6 * tempo, settle(SIT_FLOOR), PELVIS, _SITTING)
+        s.add(1.6 * tempo, s.rest(SIT_FLOOR), PELVIS, _SITTING)
     s.add(1.4 * tempo, KNEEL_SIT, KNEES, _SITTING)
     s.add(1.2 * tempo, KNEEL_UP, KNEES, _SITTING)
     s.add(1.4 * tempo, BASE, FEET, _STANDING)
@@ -161,12 +142,12 @@ def _falling(s: _Script, rng, tempo, via, end, fall_s) -> None:
     """Loss of balance (via, on the feet) and the drop (to end, the trunk on the floor)."""
     s.mark("start_s")
     s.add(fall_s * 0.45, via, FEET)
-    s.add(fall_s * 0.55, settle(end), PELVIS)
+    s.add(fall_s * 0.55, s.rest(end), PELVIS)
     s.mark("impact_s")
 
 
-def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int) -> _Script:
-    s = _Script()
+def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int, rest) -> _Script:
+    s = _Script(rest)
     s.add(_u(rng, 1.0, 2.5), BASE)
     flip = (lambda p: mirror(p)) if side else (lambda p: p)
     fall_s = _u(rng, 0.7, 1.1)
@@ -181,20 +162,20 @@ def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int)
         s.add(_u(rng, 4, 8), CHAIR, FEET, _SITTING, load=0.25)
         s.mark("start_s")
         s.add(_u(rng, 1.0, 2.0), flip(CHAIR_SLUMP), FEET, _SITTING, load=0.3)
-        s.add(_u(rng, 0.5, 0.8), settle(flip(SIDE)), PELVIS, _STANDING)
+        s.add(_u(rng, 0.5, 0.8), s.rest(flip(SIDE)), PELVIS, _STANDING)
         s.mark("impact_s")
     elif name == "chair_slide":
         s.add(1.5 * tempo, CHAIR, FEET, _SITTING, load=0.25)
         s.add(_u(rng, 4, 8), CHAIR, FEET, _SITTING, load=0.25)
         s.mark("start_s")
-        s.add(_u(rng, 0.4, 0.7), settle(SIT_FLOOR), PELVIS, _SITTING)
-        s.add(_u(rng, 0.5, 0.9), settle(flip(SUPINE) if rng.random() < 0.5 else flip(SIDE)), PELVIS, _STANDING)
+        s.add(_u(rng, 0.4, 0.7), s.rest(SIT_FLOOR), PELVIS, _SITTING)
+        s.add(_u(rng, 0.5, 0.9), s.rest(flip(SUPINE) if rng.random() < 0.5 else flip(SIDE)), PELVIS, _STANDING)
         s.mark("impact_s")
     elif name == "slow_collapse":
         s.mark("start_s")
         s.add(_u(rng, 1.0, 2.0), BUCKLE, FEET)
         s.add(_u(rng, 0.6, 1.0), KNEEL_SIT, KNEES)
-        s.add(_u(rng, 0.6, 0.9), settle(flip(SIDE)), PELVIS)
+        s.add(_u(rng, 0.6, 0.9), s.rest(flip(SIDE)), PELVIS)
         s.mark("impact_s")
     elif name == "kneel":
         s.add(_u(rng, 1.5, 2.5) * tempo, KNEEL_UP, KNEES, _SITTING)
@@ -204,17 +185,17 @@ def _script(name: str, rng, tempo: float, lie_s: float, get_up: bool, side: int)
     elif name == "lie_down":  # onto an exercise mat: kneel, sit, lie back
         s.add(_u(rng, 1.5, 2.5) * tempo, KNEEL_UP, KNEES, _SITTING)
         s.add(_u(rng, 1.2, 2.0) * tempo, KNEEL_SIT, KNEES, _SITTING)
-        s.add(_u(rng, 1.5, 2.5) * tempo, settle(SIT_BENT), PELVIS, _SITTING)  # onto the buttocks, knees up
-        s.add(_u(rng, 2.0, 3.0) * tempo, settle(SUPINE), PELVIS, _SIT_UP)
-        _lie_still(s, settle(SUPINE), rng, lie_s, _SIT_UP)
+        s.add(_u(rng, 1.5, 2.5) * tempo, s.rest(SIT_BENT), PELVIS, _SITTING)  # onto the buttocks, knees up
+        s.add(_u(rng, 2.0, 3.0) * tempo, s.rest(SUPINE), PELVIS, _SIT_UP)
+        _lie_still(s, s.rest(SUPINE), rng, lie_s, _SIT_UP)
         _get_up(s, rng, tempo)
         return s
     elif name == "lie_down_hand_first":  # slowly onto the side, a hand on the floor first
         s.add(_u(rng, 1.5, 2.2) * tempo, SQUAT, FEET)
         s.add(_u(rng, 1.2, 2.0) * tempo, flip(HAND_DOWN), FEET)
-        s.add(_u(rng, 1.5, 2.5) * tempo, flip(settle(SIT_BENT)), PELVIS, _SITTING)  # onto the hip, sitting
-        s.add(_u(rng, 1.5, 2.5) * tempo, settle(flip(SIDE)), PELVIS, _SIT_UP)
-        _lie_still(s, settle(flip(SIDE)), rng, lie_s, _SIT_UP)
+        s.add(_u(rng, 1.5, 2.5) * tempo, flip(s.rest(SIT_BENT)), PELVIS, _SITTING)  # onto the hip, sitting
+        s.add(_u(rng, 1.5, 2.5) * tempo, s.rest(flip(SIDE)), PELVIS, _SIT_UP)
+        _lie_still(s, s.rest(flip(SIDE)), rng, lie_s, _SIT_UP)
         _get_up(s, rng, tempo)
         return s
     elif name == "pick_up":
@@ -280,7 +261,8 @@ def fall_track(subject: Subject, scenario: str, rate_hz: float = DEFAULT_RATE_HZ
                             walk_radius_m=0.3, walk_line=True)
         head = _heading_of(lead.pose_aa[-1, :3])
         xy = lead.transl_m[-1, :2]
-    s = _script(scenario, rng, subject.style.tempo, lie_s, get_up, int(rng.integers(0, 2)))
+    s = _script(scenario, rng, subject.style.tempo, lie_s, get_up, int(rng.integers(0, 2)),
+                lambda p: settle(p, body, subject.betas))
     n = int(round(s.tl.duration_s * rate_hz)) + 1
     euler, heading, _, _, _, label = s.tl.sample(n, rate_hz, BASE, head)
     local = euler_xyz_deg_to_matrix(euler)
