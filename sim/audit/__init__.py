@@ -1,5 +1,5 @@
 """``cavatar sim audit``: small generated sets of every activity measured against the
-literature ranges of issue 13 (balance, force, foot roll, region loads, variety).
+literature ranges of issue 13 (balance, force, foot roll, region loads, print areas, variety).
 
     report = run_audit(subjects=3, seconds=8.0, seed=0)    # {"settings", "checks", "summary"}
     write_report(report, "docs/sim/audit")                 # audit.json + audit.md
@@ -22,7 +22,7 @@ def run_audit(subjects: int = 3, seconds: float = 8.0, seed: int = 0, activities
               progress=None) -> dict:
     from edge.body import BodyModel
     from sim.audit import checks as ck
-    from sim.audit.measure import measure_activity
+    from sim.audit.measure import measure_activity, measure_lying
     from sim.contact import ContactModel, regional_tissue
     from sim.motion import ACTIVITIES
 
@@ -42,6 +42,9 @@ def run_audit(subjects: int = 3, seconds: float = 8.0, seed: int = 0, activities
             out += ck.gait_checks(a, results[a], labels[a])
     out += ck.load_checks(results, standing, labels)
     out += ck.law_checks(results)
+    if progress:
+        progress("measuring lying after a fall")
+    out += ck.lying_checks(measure_lying("fall_backward", max(subjects, 5), seed, carpet, body, tissue))
     if progress:
         progress("measuring variety")
     for a in activities:

@@ -17,6 +17,7 @@ FORCE_RANGE = {a: (0.9, 1.1) for a in SLOW} | {"stepping": (0.8, 1.2), "turning"
                                                 "walking": (0.6, 1.35)}
 SRC_FORCE = ("slow movements ~0.9–1.1 × mg (issue 13); walking vGRF 0–1.3 × mg, whole body 0.6–1.35 (note: "
              "sensor-and-calibration)")
+SRC_MAGNITUDES = "a 70 kg adult on the carpet (note: sensor-and-calibration, magnitudes)"
 SRC_BALANCE = "a body that can stand: COP target inside the support in ≥ 99 % of solves (issue 13)"
 
 
@@ -141,6 +142,10 @@ def load_checks(results: dict, standing_index: int, labels: dict) -> list[dict]:
         out.append(_check("sitting.buttocks_share", "floor sitting: buttocks' share of the weight (median still frame)",
                           100 * _median(a["share"][sit, i_b]) if sit.any() else None, "%", 75, 95,
                           "the body's centre of mass puts ~84 % on the buttocks (issue 13)"))
+        out.append(_check("sitting.area", "floor sitting: contact area, sensels above 0.5 kPa (median still frame)",
+                          1e4 * _median(a["area_m2"][sit]) if sit.any() else None, "cm²", 800, 1500, SRC_MAGNITUDES))
+        out.append(_check("sitting.mean_kpa", "floor sitting: mean pressure over that area (median still frame)",
+                          _median(a["mean_kpa"][sit]) if sit.any() else None, "kPa", 4.6, 8.6, SRC_MAGNITUDES))
         out.append(_check("sitting.buttocks_peak", "floor sitting: peak under the ischial tuberosities at ~5 mm (median)",
                           _median(a["peak_fine_kpa"][sit, i_b]) if sit.any() else None, "kPa", 52, 149,
                           "rigid-seat ischial peaks 52–149 kPa (issue 13)"))
@@ -155,6 +160,14 @@ def load_checks(results: dict, standing_index: int, labels: dict) -> list[dict]:
                           _median(a["peak_fine_kpa"][lie, i_b]) if lie.any() else None, "kPa", 8, 30,
                           "supine on a firm surface, sacral peaks ~60–200 mmHg (8–27 kPa; est.)"))
     return out
+
+
+def lying_checks(lying: np.ndarray) -> list[dict]:
+    """Supine after a fall backwards, lying still (measure.measure_lying): the print's area and mean pressure."""
+    return [_check("lying.supine_area", "lying supine after a fall: contact area, sensels above 0.5 kPa (median subject)",
+                   1e4 * _median(lying[:, 0]), "cm²", 1000, 2000, SRC_MAGNITUDES),
+            _check("lying.supine_mean_kpa", "lying supine after a fall: mean pressure over that area (median subject)",
+                   _median(lying[:, 1]), "kPa", 3.4, 6.9, SRC_MAGNITUDES)]
 
 
 def law_checks(results: dict) -> list[dict]:

@@ -28,6 +28,7 @@ MIDFOOT = (0.30, 0.60)  # midfoot: 30–60 % of the foot's length from the heel 
 STILL_SPEED_M_S = 0.08  # every joint slower than this and the COM's acceleration
 STILL_ACC_M_S2 = 0.3  # below this: a still frame
 COP_TOLERANCE_M = 0.005  # a COP target missed by less than a quarter of a sensel counts as reached
+CONTACT_KPA = 0.5  # a sensel above this is in contact (the contact model's mask)
 
 
 def vertex_regions(body) -> np.ndarray:
@@ -53,6 +54,8 @@ class Frames:
     share: list = field(default_factory=list)  # (len(REGIONS),) share of the force per region
     peak_fine_kpa: list = field(default_factory=list)  # (len(REGIONS),) peak fine-scale pressure per region
     peak_sensel_kpa: list = field(default_factory=list)
+    area_m2: list = field(default_factory=list)  # sensels above CONTACT_KPA, m²
+    mean_kpa: list = field(default_factory=list)  # mean pressure over those sensels
     foot_cop: list = field(default_factory=list)  # (2,) COP along each foot, 0 heel … 1 toe (NaN: unloaded)
     foot_midfoot: list = field(default_factory=list)  # (2,) midfoot share of each foot's load
     foot_force: list = field(default_factory=list)  # (2,) each foot's force / (m·g)
@@ -60,6 +63,12 @@ class Frames:
     foot_hull_dist: list = field(default_factory=list)  # (2,) ZMP distance outside each foot's contact hull, m
     segment: list = field(default_factory=list)  # (subject, frame) of each entry
     tempo: list = field(default_factory=list)  # per subject: the activity's keys against their own durations (< 1: squeezed)
+
+
+def contact_area(pressure_kpa: np.ndarray, pitch_m: float) -> tuple[float, float]:
+    """(area m², mean kPa) of the sensels above CONTACT_KPA (0, 0 when none)."""
+    on = pressure_kpa > CONTACT_KPA
+    return float(on.sum() * pitch_m ** 2), float(pressure_kpa[on].mean()) if on.any() else 0.0
 
 
 def _hull_distance(points: np.ndarray, p: np.ndarray) -> float:
@@ -90,6 +99,8 @@ def measure_track(frames: Frames, carpet, body, tissue, track, regions: np.ndarr
         frames.force_ratio.append(res.force_total_n / mg)
         frames.com_xy.append(dyn.com_m[t, :2])
         frames.peak_sensel_kpa.append(float(res.pressure_kpa.max()))
+        area, mean = contact_area(res.pressure_kpa, carpet.pitch_m)
+        frames.area_m2.append(area), frames.mean_kpa.append(mean)
         nan2 = np.full(2, np.nan)
         if res.airborne or res.fine_pressure_kpa is None:
             frames.target_ok.append(None)
@@ -147,6 +158,28 @@ def measure_activity(activity: str, subjects: int, seconds: float, seed: int, ca
         frames.tempo.append(1.0 if track.tempo is None else float(track.tempo[0]))
         measure_track(frames, carpet, body, tissue, track, regions, s)
     return frames
+
+
+def measure_lying(scenario: str, subjects: int, seed: int, carpet, body, tissue, after_s: float = 3.0) -> np.ndarray:
+    """(subjects, 2) contact area m² and mean kPa of a body lying still ``after_s`` after the impact of a
+    fall scenario (sim.motion.falls: the pose settled on the floor), one frame per subject."""
+    from sim.contact import subject_mass_kg
+    from sim.motion import Subject
+    from sim.motion.falls import fall_track
+
+    size = carpet.cols * carpet.pitch_m
+    out = []
+    for s in range(subjects):
+        rng = np.random.default_rng((seed, 11, s))
+        subj = Subject.random(100 + s, seed * 1000 + 100 + s)
+        ft = fall_track(subj, scenario, 14.0, rng, body, lie_s=after_s + 2.0, get_up=False, start_xy=(size / 2, size / 2))
+        tr = ft.track
+        k = int(round((ft.truth["impact_s"] + after_s) * tr.rate_hz))
+        v = body.forward(tr.pose_aa[k:k + 1], tr.betas, tr.transl_m[k:k + 1], vertices=True)["vertices"][0]
+        v[:, :2] += size / 2 - v[:, :2].mean(axis=0)  # the whole body on the carpet
+        res = carpet.pressure_kpa(v, body.faces, subject_mass_kg(body, tr.betas), static=True, tissue_kpa_per_mm=tissue)
+        out.append(contact_area(res.pressure_kpa, carpet.pitch_m))
+    return np.asarray(out)
 
 
 def arrays(frames: Frames) -> dict[str, np.ndarray]:

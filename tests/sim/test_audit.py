@@ -7,7 +7,7 @@ from edge.body import BodyModel
 from edge.cli import main
 from sim.audit import markdown, run_audit
 from sim.audit.checks import _check
-from sim.audit.measure import REGIONS, _hull_distance, vertex_regions
+from sim.audit.measure import REGIONS, _hull_distance, contact_area, vertex_regions
 
 
 def test_a_check_is_in_range_only_inside_its_bounds():
@@ -35,12 +35,23 @@ def test_audit_of_one_activity_writes_its_checks(tmp_path):
     report = run_audit(subjects=1, seconds=6.0, seed=1, activities=("stepping",), spread_subjects=2)
     ids = {c["id"] for c in report["checks"]}
     assert {"force.stepping", "balance.stepping", "toe_off.stepping", "weight_shift.stepping",
-            "spread.stepping", "law.airborne"} <= ids
+            "spread.stepping", "law.airborne", "lying.supine_area", "lying.supine_mean_kpa"} <= ids
     assert "support.stepping" not in ids  # stepping never stands still: nothing to judge, no check
     force = next(c for c in report["checks"] if c["id"] == "force.stepping")
     assert force["value"] is not None and 0 <= force["value"] <= 100
+    area = next(c for c in report["checks"] if c["id"] == "lying.supine_area")["value"]
+    assert 200 < area < 3000  # cm²: a body lying, not feet and not the carpet
     assert report["summary"]["total"] == len(report["checks"])
     assert markdown(report).count("\n| ") == len(report["checks"]) + 1
+
+
+def test_contact_area_counts_the_sensels_above_the_contact_threshold():
+    p = np.zeros((8, 8))
+    p[2:4, 2:5] = 6.0
+    p[0, 0] = 0.4  # below 0.5 kPa: not in contact
+    area, mean = contact_area(p, 0.02)
+    assert abs(area - 6 * 0.02 ** 2) < 1e-12 and mean == 6.0
+    assert contact_area(np.zeros((4, 4)), 0.02) == (0.0, 0.0)
 
 
 def test_cli_audit_refuses_too_short_sequences(tmp_path, capsys):
