@@ -113,7 +113,7 @@ def clip_features(clip: Clip, body, path: str = "board", cal_dir="out/falls") ->
     path: "board" (raw counts and calibration, as on the board) or "clean" (the contact model's pressure)."""
     from edge.scene.falls import observe
     from edge.scene.pipeline import SceneTracker
-    from sim.contact import ContactModel, subject_mass_kg, tissue_stiffness
+    from sim.contact import ContactModel, regional_tissue, subject_mass_kg
     from sim.objects import DroppedBag, Pet
 
     rng = np.random.default_rng((clip.seed, sum(map(ord, clip.name))))
@@ -135,7 +135,7 @@ def clip_features(clip: Clip, body, path: str = "board", cal_dir="out/falls") ->
         objects.append(bag)
         truth["bag_kg"] = round(bag.mass_kg, 1)
     carpet = ContactModel(GRID, GRID, pitch_m=PITCH_M)
-    tissue = tissue_stiffness(body)
+    tissue = regional_tissue(body)  # as the live carpet and the datasets
     verts = []
     for tr, load in people:
         mass = subject_mass_kg(body, tr.betas)
