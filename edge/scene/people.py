@@ -61,6 +61,9 @@ class Body:
 HEAVY_FRACTION = 0.35
 # ... and the body's own contacts still carry this fraction of its weight.
 KEEP_FRACTION = 0.8
+# ... and of what they carried when the excess began: a newcomer takes no weight from the body's other
+# contacts, a sit-up's back put down takes 20-35 % from the buttocks.
+REST_KEEP_FRACTION = 0.85
 # A body whose kept contacts carry less than this fraction of its weight reaches out only within its weight
 # (see _reach): a foot lands while the other carries the body, but in a slow sit-down the feet read light
 # before the buttocks land. The simulator moving everyone at once is caught by moved_at_once.
@@ -340,8 +343,12 @@ def _split_heavy(centres_m: np.ndarray, forces_n: np.ndarray, recent: np.ndarray
         parts = [p for p in parts if carries(float(forces_n[p].sum())) and keeps(float(forces_n[p].sum()))]
     if not parts:
         grew = np.ones(len(centres_m), bool) if grown_n is None else grown_n >= 0.5 * excess
+        rest_kept = np.ones(len(centres_m), bool)
+        if grown_n is not None:  # the other contacts still carry what they carried when the excess began
+            before = forces_n - grown_n
+            rest_kept = total - forces_n >= REST_KEEP_FRACTION * (float(before.sum()) - before)
         parts = [np.array([i]) for i in range(len(centres_m))
-                 if grew[i] and carries(float(forces_n[i])) and keeps(float(forces_n[i]))]
+                 if grew[i] and rest_kept[i] and carries(float(forces_n[i])) and keeps(float(forces_n[i]))]
     if not parts:
         return None
     best = min(parts, key=lambda p: abs(float(forces_n[p].sum()) - excess))
