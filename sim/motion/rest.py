@@ -13,7 +13,7 @@ body's lowest point, which is the floor:
    k·θ² metres), minimised by Powell's method from the rigid rest. The trunk then lies on the floor
    instead of bridging between a shoulder and a knee, as a body lying still does.
 
-The result is cached per pose, shape and body model (a few hundred forward passes, ~0.5 s).
+The result is cached per pose, shape and body model (hundreds to a few thousand forward passes, 0.2–2 s).
 """
 
 from __future__ import annotations
