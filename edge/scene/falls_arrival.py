@@ -17,7 +17,9 @@ import numpy as np
 from edge.scene.falls_config import FallConfig
 from edge.scene.falls_features import BodyFeatures
 
-RUN_GAP_S = 0.25  # on-the-feet readings further apart than this are two stances
+RUN_GAP_S = 0.25  # on-the-feet readings further apart than this are two stances ...
+STANCE_JUMP_M = 0.4  # ... and so are two whose centres lie further apart than this (walking, kneeling, sitting
+# move it ≤ 0.38 m between frames; a falling body's buttocks, read compact as they land, 0.6 m from its feet)
 SEATED_STILL_M = 0.05  # a seated person's feet stay within this of where they rest ...
 SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
 STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
@@ -62,12 +64,12 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
 
 def stances(feet: Sequence[Reading], start_t: float, centre_m: np.ndarray, c: FallConfig) -> list[list]:
     """The stances before start_t within fall_radius_m of centre_m, newest first, each newest first: stretches of
-    on-the-feet readings without a gap longer than RUN_GAP_S."""
+    on-the-feet readings without a gap longer than RUN_GAP_S or a jump of the centre longer than STANCE_JUMP_M."""
     runs: list[list] = []
     for r in reversed(feet):
         if r[0] >= start_t or np.linalg.norm(r[1] - centre_m) > c.fall_radius_m:
             continue
-        if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S:
+        if not runs or runs[-1][-1][0] - r[0] > RUN_GAP_S or np.linalg.norm(runs[-1][-1][1] - r[1]) > STANCE_JUMP_M:
             runs.append([])
         runs[-1].append(r)
     return runs

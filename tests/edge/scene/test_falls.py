@@ -235,6 +235,20 @@ def test_a_landing_read_as_feet_for_one_frame_is_no_supported_descent():
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
+def test_buttocks_landing_read_as_feet_right_after_the_stance_is_no_supported_descent():
+    """A body falling backwards lands its buttocks first, read compact for one frame 0.6 m from the feet and with no
+    gap in time after them (held-out fall_backward-s6 after the bodies came to rest physically): a stance cannot
+    jump 0.6 m in a frame, so that frame is no stance that lowered the body under control."""
+    a = np.array([1.05, 1.28])
+    script = [(2.0, [body([1], a, force_n=229.0, area_m2=0.0345, length_m=0.57)]),
+              (0.45, [body([1], a + (0.05, -0.04), force_n=100.0, area_m2=0.011, length_m=0.58)]),  # heels, tipping
+              (1 / RATE, [body([1], (1.14, 0.75), force_n=355.0, area_m2=0.0367, length_m=0.23)]),  # buttocks: "feet"
+              (1 / RATE, [body([1], (1.15, 0.66), force_n=439.0, area_m2=0.0624, length_m=0.76)]),  # the back down
+              (34.0, [body([1], (1.17, 0.57), force_n=435.0, area_m2=0.062, length_m=0.9)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
 def test_stepping_forward_and_standing_still_is_not_lying():
     """A step forward unloads nothing: feet that end up 0.6 m away and stand still are on their feet."""
     a = np.array([0.5, 0.85])
