@@ -22,7 +22,9 @@ STANCE_JUMP_M = 0.4  # ... and so are two whose centres lie further apart than t
 # move it ≤ 0.38 m between frames; a falling body's buttocks, read compact as they land, 0.6 m from its feet)
 SEATED_STILL_M = 0.05  # a seated person's feet stay within this of where they rest ...
 SEATED_STEADY = 0.25  # ... and their load within this fraction of its usual
-STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds
+STANCE_S = 0.5  # where a stance stood: the median centre over its last this many seconds ...
+TIPPING_S = 1.0  # ... and over the second before those (a body toppling pivots on its feet: the centre of pressure
+# runs 0.2-0.3 m toward the fall while the feet still carry the load)
 # A supported descent is no fall (a push-up from a crouch, lying back from sitting on the floor): from the last reading
 # on the feet to the first on the floor the centre of pressure slid at most SUPPORTED_JUMP_M (a falling body's trunk
 # lands ≥ 0.24 m from its feet on the tuning falls; push-ups and sit-ups 0.00–0.15 m) while that reading still carried
@@ -51,8 +53,7 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
             continue  # a frame or two on the "feet" just before landing: the landing body itself, read compact
         down = start_t - end_t
         if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
-            where = np.median([r[1] for r in run if r[0] >= end_t - STANCE_S], axis=0)  # move by a body's height?
-            moved = float(np.linalg.norm(where - b.centre_m)) >= c.min_shift_m
+            moved = shift_m(run, b.centre_m) >= c.min_shift_m  # did the load move by a body's height?
             return down if moved or collapsed(start_t, run, landed, b, c, standing) else None
         if seated(run, b, c):  # feet under a chair: the whole weight came down onto the floor
             return down
@@ -60,6 +61,18 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
             return down
         # lighter than the body now lying and not seated: the body in the air, a hand: look further back
     return None
+
+
+def shift_m(run: Sequence[Reading], centre_m: np.ndarray) -> float:
+    """How far ``centre_m`` lies from where the stance ``run`` (newest first) stood: over its last STANCE_S, or over the
+    TIPPING_S before that (before a fall began to topple it), whichever is further."""
+    end_t = run[0][0]
+    out = 0.0
+    for lo, hi in ((end_t - STANCE_S, end_t), (end_t - STANCE_S - TIPPING_S, end_t - STANCE_S)):
+        pts = [r[1] for r in run if lo <= r[0] <= hi]
+        if pts:
+            out = max(out, float(np.linalg.norm(np.median(pts, axis=0) - centre_m)))
+    return out
 
 
 def stances(feet: Sequence[Reading], start_t: float, centre_m: np.ndarray, c: FallConfig) -> list[list]:

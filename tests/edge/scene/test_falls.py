@@ -249,6 +249,20 @@ def test_buttocks_landing_read_as_feet_right_after_the_stance_is_no_supported_de
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
+def test_a_fall_is_judged_from_where_they_stood_before_they_toppled():
+    """Toppling sideways, the body pivots on its feet: their centre of pressure runs 0.24 m toward the fall while they
+    still carry the load (tuning fall_sideways-s1). The landed body lies 0.34 m from the end of that, 0.6 m from where
+    they stood."""
+    a = np.array([0.6, 1.46])
+    tip = [body([1], a + (b - a) * f, force_n=400.0, area_m2=0.03, length_m=0.55)
+           for f, b in zip(np.linspace(0, 1, 8), [np.array([0.44, 1.22])] * 8)]
+    script = [(2.0, [body([1], a, force_n=401.0, area_m2=0.035, length_m=0.57)])]
+    script += [(1 / RATE, [t]) for t in tip]
+    script += [(0.15, []), (34.0, [body([1], (0.46, 0.88), **LYING)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
 def test_stepping_forward_and_standing_still_is_not_lying():
     """A step forward unloads nothing: feet that end up 0.6 m away and stand still are on their feet."""
     a = np.array([0.5, 0.85])
