@@ -49,8 +49,9 @@ def arrival(feet: Sequence[Reading], start_t: float, b: BodyFeatures, landed_len
     landed = landed_length_m if np.isfinite(landed_length_m) else b.length_m
     for run in runs:
         end_t = run[0][0]
-        if end_t - run[-1][0] < RUN_GAP_S and run is runs[0] and len(runs) > 1:
-            continue  # a frame or two on the "feet" just before landing: the landing body itself, read compact
+        if end_t - run[-1][0] < SUPPORTED_STANCE_S and run is runs[0] and len(runs) > 1:
+            continue  # under SUPPORTED_STANCE_S on the "feet" just before landing: the landing body itself, read
+            # compact (a frame or two; buttocks sliding off a chair, 0.36 s) — nobody stands that briefly
         down = start_t - end_t
         if b.force_n <= c.max_load_ratio * float(np.median([r[2] for r in run])):  # stood here: did the load
             moved = shift_m(run, b.centre_m) >= c.min_shift_m  # did the load move by a body's height?

@@ -263,6 +263,17 @@ def test_a_fall_is_judged_from_where_they_stood_before_they_toppled():
     assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
 
 
+def test_sliding_off_a_chair_onto_the_buttocks_is_no_stance_before_the_fall():
+    """Sliding off a chair beside the carpet, the buttocks land first and read as feet for 0.36 s (0.045 m², 0.87 m
+    long) before the body lies back (tuning chair_slide-s0): too short a stance to have stood on, so the fall is judged
+    from the seated feet before it."""
+    script = [(6.0, [body([1], (0.69, 1.14), force_n=64.0, area_m2=0.007, length_m=0.3)]),  # seated: feet only
+              (0.36, [body([1], (0.91, 0.71), force_n=440.0, area_m2=0.045, length_m=0.87)]),
+              (34.0, [body([1], (0.98, 0.73), force_n=591.0, area_m2=0.065, length_m=0.6)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+
+
 def test_stepping_forward_and_standing_still_is_not_lying():
     """A step forward unloads nothing: feet that end up 0.6 m away and stand still are on their feet."""
     a = np.array([0.5, 0.85])
