@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.spatial.transform import Rotation
 
 from edge.body.rotations import euler_xyz_deg_to_matrix, matrix_to_axis_angle
 from sim.motion.generate import body_model
-from sim.motion.rig import UPRIGHT, J
+from sim.motion.rig import UPRIGHT, J, axis_rotation, rot_x
 
 TILT_DEG = 45.0  # how far from the scripted posture a body may roll or tip as it comes to rest
 TURN_M_PER_DEG = 0.0004  # a rigid turn costs ~1 cm of height per 25°: no turn for nothing
@@ -41,25 +42,15 @@ _SETTLED: dict[bytes, np.ndarray] = {}
 
 def _tilt_matrix(tilt_deg: np.ndarray) -> np.ndarray:
     """(N,2) tilts about the world x then y axis, degrees → (N,3,3) = Ry·Rx."""
-    a, b = np.radians(tilt_deg[:, 0]), np.radians(tilt_deg[:, 1])
-    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
-    rx = np.zeros((len(a), 3, 3))
-    rx[:, 0, 0], rx[:, 1, 1], rx[:, 1, 2], rx[:, 2, 1], rx[:, 2, 2] = 1, ca, -sa, sa, ca
-    ry = np.zeros((len(a), 3, 3))
-    ry[:, 1, 1], ry[:, 0, 0], ry[:, 0, 2], ry[:, 2, 0], ry[:, 2, 2] = 1, cb, sb, -sb, cb
-    return ry @ rx
-
-
-def _euler_xyz_deg(r: np.ndarray) -> np.ndarray:
-    """(3,3) R = Rx·Ry·Rz → intrinsic x, y, z angles in degrees (the inverse of euler_xyz_deg_to_matrix)."""
-    return np.degrees([np.arctan2(-r[1, 2], r[2, 2]), np.arcsin(np.clip(r[0, 2], -1, 1)), np.arctan2(-r[0, 1], r[0, 0])])
+    t = np.radians(tilt_deg)
+    return axis_rotation(np.array([0.0, 1.0, 0.0]), t[:, 1]) @ rot_x(t[:, 0])
 
 
 def _tilted(p: np.ndarray, tilt_deg) -> np.ndarray:
     """The pose p with its root turned by a world tilt (about x, about y)."""
     out = p.copy()
     root = UPRIGHT.T @ _tilt_matrix(np.asarray(tilt_deg, float).reshape(1, 2))[0] @ UPRIGHT @ euler_xyz_deg_to_matrix(p[0])
-    out[0] = _euler_xyz_deg(root)
+    out[0] = Rotation.from_matrix(root).as_euler("XYZ", degrees=True)  # intrinsic: R = Rx·Ry·Rz
     return out
 
 
@@ -103,21 +94,20 @@ def _rigid_rest(p: np.ndarray, heights: _Heights) -> np.ndarray:
 
 
 def _limp(p: np.ndarray, heights: _Heights) -> np.ndarray:
-    idx = [(J[name], axis) for name, axis, _ in LIMP]
-    bounds = [(-GIVE_DEG if s == 0 else (0.0 if s > 0 else -GIVE_DEG), GIVE_DEG if s == 0 else (GIVE_DEG if s > 0 else 0.0))
-              for _, _, s in LIMP]
+    rows = np.array([J[name] for name, _, _ in LIMP])
+    cols = np.array([axis for _, axis, _ in LIMP])
+    bounds = [(-GIVE_DEG if s <= 0 else 0.0, GIVE_DEG if s >= 0 else 0.0) for _, _, s in LIMP]
     k_per_deg2 = STIFFNESS_M_PER_RAD2 * np.radians(1.0) ** 2
 
     def pose_of(x):
         q = p.copy()
-        for (j, axis), dx in zip(idx, x):
-            q[j, axis] += dx
+        q[rows, cols] += x  # every (joint, axis) of LIMP once
         return q
 
     def cost(x):
         return float(heights(pose_of(x)[None])[0] + k_per_deg2 * np.sum(np.square(x)))
 
-    res = minimize(cost, np.zeros(len(idx)), method="Powell", bounds=bounds, options={"xtol": 0.5, "ftol": 1e-5, "maxfev": 4000})
+    res = minimize(cost, np.zeros(len(LIMP)), method="Powell", bounds=bounds, options={"xtol": 0.5, "ftol": 1e-5, "maxfev": 4000})
     return pose_of(res.x)
 
 
