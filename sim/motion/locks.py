@@ -167,7 +167,10 @@ def _anchor_point(rig: Rig, sched: Schedule, posed: Posed, locks: dict[Lock, np.
         w = np.array([start_xy[0], start_xy[1], 0.0]) + lock_local[s, p] * [1, 1, 0]  # pelvis over start_xy
     else:
         q, wq = w_prev
-        w = wq - lock_local[s, q] + lock_local[s, p]  # continuity of transl at the switch
+        # continuity of transl at the switch; from one foot to the other (a step) as the body is
+        # on the frame before, where the landing foot touches: by s the push-off has begun
+        f = s - 1 if s > 0 and p in (LF, RF) and q in (LF, RF) else s
+        w = wq - lock_local[f, q] + lock_local[f, p]
     if p in sched.span_of and sched.contact[s, p]:
         key = (p, int(sched.span_of[p][s]))
         if key in locks:  # already locked as a non-anchor limb: keep that lock

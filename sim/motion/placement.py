@@ -156,9 +156,14 @@ class _People:
         order = list(self.rng.permutation(names)) if shuffle else names
         alone = len(self.subjects) == 1
         track = person_track(self.subjects[k], order, self.seconds_per_activity, self.rate_hz, self.rng, self.model,
-                             heading_rad=0.0, walk_radius_m=0.6 if alone else 0.45, walk_line=not alone,
+                             heading_rad=0.0, walk_radius_m=WALK_RADIUS_M if alone else 0.45, walk_line=not alone,
                              extend=self.extend, total_s=self.total_s)
         return track, _footprints(track, self.model, stride=2)
+
+
+# A walker alone goes between spots this far from the start (a 1.83 m carpet: the pelvis then
+# spans ~1.0 m, the feet reach ~0.3 m beyond it); with others, back and forth on a line.
+WALK_RADIUS_M = 0.45
 
 
 def scene(subjects, activities, seconds_per_activity: float = 10.0, rate_hz: float = DEFAULT_RATE_HZ,
