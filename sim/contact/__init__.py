@@ -9,7 +9,7 @@ Example::
 
     body = BodyModel.load("lite")
     mass = subject_mass_kg(body, betas)                 # once per subject (zero pose)
-    tissue = regional_tissue(body)                      # once per body model, (V,) kPa/mm (by region)
+    tissue = regional_tissue(body)                      # once per body model: a Tissue (by region)
     carpet = ContactModel(96, 96, pitch_m=0.01905)      # 4.76 mm cells, rug σ 5 mm
     verts = body.forward(pose, betas, transl, vertices=True)["vertices"][0]
     res = carpet.pressure_kpa(verts, body.faces, mass, acc_z_m_s2=0.0, static=True,
@@ -66,10 +66,10 @@ from sim.contact.model import G_M_S2, ContactModel
 from sim.contact.raster import LowestSurface, lowest_surface
 from sim.contact.result import ContactResult, SceneResult
 from sim.contact.sampling import sampling_kernel
-from sim.contact.tissue import regional_tissue
+from sim.contact.tissue import Tissue, regional_tissue
 
 __all__ = [
     "ContactModel", "ContactResult", "SceneResult", "G_M_S2", "DENSITY_KG_M3", "TISSUE_KPA_PER_MM", "MeshReport",
-    "body_mass_kg", "mesh_centroid_m", "mesh_report", "mesh_volume_m3", "subject_mass_kg", "tissue_stiffness", "regional_tissue",
+    "body_mass_kg", "mesh_centroid_m", "mesh_report", "mesh_volume_m3", "subject_mass_kg", "tissue_stiffness", "regional_tissue", "Tissue",
     "lowest_surface", "LowestSurface", "sampling_kernel",
 ]

@@ -15,6 +15,7 @@ from sim.contact.plane import solve_plane
 from sim.contact.raster import lowest_surface
 from sim.contact.result import ContactResult, SceneResult
 from sim.contact.sampling import sample_sensels, sampling_kernel
+from sim.contact.tissue import Tissue
 
 G_M_S2 = 9.81
 
@@ -112,7 +113,8 @@ class ContactModel:
         COM; acc_xy_m_s2: the COM's horizontal acceleration, which moves the target COP
         to com_xy − com_z·a_xy/(g + a_z) (implies a balanced solve); neither: the COP
         falls where the uniform indentation puts it. tissue_kpa_per_mm: (V,) tissue
-        stiffness (``tissue_stiffness(model)``) or a scalar; default uniform.
+        stiffness (``tissue_stiffness(model)``) or a scalar, or a ``tissue.Tissue`` (a soft
+        layer over that stiffness, by vertex: ``regional_tissue(model)``); default uniform.
         """
         v = np.asarray(vertices, dtype=np.float64)
         faces = np.asarray(faces)
@@ -128,7 +130,7 @@ class ContactModel:
             target_cop = com[:2] - com[2] * axy / max(self.g + float(acc_z_m_s2), 1e-6)
         elif static:
             target_cop = com[:2].copy()
-        k_vertex = self._vertex_stiffness(tissue_kpa_per_mm, len(v))
+        attr, soft_kpa_per_mm = self._tissue_attr(tissue_kpa_per_mm, len(v))
         zmin = float(v[:, 2].min())
         if target_f <= 0 or zmin > self.max_gap_m:
             return self._empty(com, mass_kg, target_f, target_cop, airborne=True)
@@ -137,10 +139,11 @@ class ContactModel:
         for attempt in range(6):
             # compliance (1/k) is interpolated across a triangle: tissue in series, so a soft vertex
             # (the foot's arch) stays soft between stiff neighbours (heel, metatarsal heads)
-            surf = lowest_surface(v, faces, 1.0 / k_vertex, z_max, self.cell_m, faces_t=self._faces_t(faces))
+            surf = lowest_surface(v, faces, attr, z_max, self.cell_m, faces_t=self._faces_t(faces))
             if surf.empty:
                 return self._empty(com, mass_kg, target_f, target_cop, airborne=True)
-            sol = solve_plane(surf, zmin, z_max, target_f, target_cop, self.exponent, self.cell_m, self.max_slope)
+            sol = solve_plane(surf, zmin, z_max, target_f, target_cop, self.exponent, self.cell_m, self.max_slope,
+                              soft_kpa_per_mm)
             if not sol["balanced"] and z_max - zmin < self.max_band_m:
                 # Support may lie higher than the band (a foot or hand a few cm up): widen it.
                 z_max = zmin + min(2.0 * (z_max - zmin), self.max_band_m)
@@ -177,13 +180,29 @@ class ContactModel:
             self._faces_cache = (faces, np.ascontiguousarray(np.asarray(faces).T, dtype=np.intp))
         return self._faces_cache[1]
 
-    def _vertex_stiffness(self, tissue, n_vertices):
+    def _tissue_attr(self, tissue, n_vertices):
+        """What the raster interpolates per vertex: the compliance (mm/kPa) of tissue and rug in
+        series, with the soft layer's thickness (mm) as a second column when there is one; and
+        the soft layer's stiffness with the rug's (kPa/mm, 0 without one)."""
+        layer, soft_kpa_per_mm = None, 0.0
+        if isinstance(tissue, Tissue):
+            tissue, layer, soft_kpa_per_mm = tissue.kpa_per_mm, tissue.soft_layer_mm, tissue.soft_kpa_per_mm
         if tissue is None:
             tissue = self.default_tissue
         k = np.broadcast_to(np.asarray(tissue, dtype=np.float64), (n_vertices,))
         if (k <= 0).any() or not np.isfinite(k).all():
             raise ValueError("tissue stiffness must be positive and finite")
-        return 1.0 / (1.0 / k + 1.0 / self.rug_kpa_per_mm)  # tissue and rug in series
+        compliance = 1.0 / k + 1.0 / self.rug_kpa_per_mm  # tissue and rug in series
+        if layer is None:
+            return compliance, 0.0
+        layer = np.asarray(layer, dtype=np.float64)
+        if layer.shape != (n_vertices,) or (layer < 0).any() or not np.isfinite(layer).all():
+            raise ValueError("the soft layer must be a finite, non-negative (V,) array in mm")
+        if not soft_kpa_per_mm > 0:
+            raise ValueError("the soft layer's stiffness must be positive")
+        if not (layer > 0).any():
+            return compliance, 0.0
+        return np.stack([compliance, layer], 1), 1.0 / (1.0 / soft_kpa_per_mm + 1.0 / self.rug_kpa_per_mm)
 
     def _finish(self, surf, sol, com, mass_kg, target_f, target_cop, keep_fine):
         """The solved plane's field: cell forces, cropped fine field, COPs, sensels → ContactResult."""
@@ -202,7 +221,7 @@ class ContactModel:
         j0, i0 = surf.origin[0] + jlo, surf.origin[1] + ilo
         jj, ii = jj - jlo, ii - ilo
         p_kpa = np.zeros((ny, nx))
-        p_kpa[jj, ii] = f_cell / (1e3 * area)
+        np.add.at(p_kpa, (jj, ii), f_cell / (1e3 * area))  # a cell with a soft layer has two beds
         f_total, f_on, cop_total, cop_on = self._forces_and_cops(jj + j0, ii + i0, f_cell)
         sensels = sample_sensels(p_kpa, (j0, i0), self._ky, self._kx, self.pad)
         pressure = sensels.astype(np.float32)
@@ -224,7 +243,7 @@ class ContactModel:
             airborne=False,
             indentation_mm=float(d.max() * 1e3),
             slope=np.array([sol["sx"], sol["sy"]]),
-            contact_area_m2=float(d.size * area),
+            contact_area_m2=float(np.count_nonzero(p_kpa) * area),
             sensel_force_n=float(sensels.sum() * 1e3 * self.pitch_m ** 2),
             iterations=int(sol["iterations"]),
             info={"band_mm": sol["band_m"] * 1e3, "raster_attempts": sol["attempts"], "samples": surf.samples,

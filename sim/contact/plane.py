@@ -96,19 +96,32 @@ def _balance(theta, z, kk, dx, dy, target_f, n, max_slope):
 
 
 def solve_plane(surf: LowestSurface, zmin: float, z_max: float, target_f: float, target_cop, exponent: float,
-                cell_m: float, max_slope: float) -> dict:
+                cell_m: float, max_slope: float, soft_kpa_per_mm: float = 0.0) -> dict:
     """Indentation plane z = zmin + h + sx·(x−tx) + sy·(y−ty) over the surface below z_max:
     solve h (and the slopes when a COP target is set) so that Σ p·A = target_f and the
     moments about the target vanish.
 
-    surf.attr holds each cell's compliance (mm/kPa). Returns h, sx, sy, ref (the target, or
-    the cells' mean centre), balanced, iterations and cells = (jj, ii, z, kk, dx, dy)."""
+    surf.attr holds each cell's compliance (mm/kPa) of the deep bed, or (compliance, soft
+    layer mm): two beds in parallel, a soft one (soft_kpa_per_mm) on the surface and the deep
+    one that many mm below it (``tissue.Tissue``). Returns h, sx, sy, ref (the target, or
+    the cells' mean centre), balanced, iterations and cells = (jj, ii, z, kk, dx, dy), a cell
+    listed once per bed it has."""
     xs, ys = surf.centres()
     jj, ii = np.nonzero(surf.z_m < z_max)  # surface above the band is checked after the solve
     z = surf.z_m[jj, ii] - zmin
     n = exponent
     # force per cell in N for d in metres: K·d^n, K = k[kPa/mm]·1e3·(1e3)^n·A
-    kk = 1e3 * (1e3 ** n) * cell_m ** 2 / np.maximum(surf.attr[jj, ii], 1e-12)
+    per_kpa_per_mm = 1e3 * (1e3 ** n) * cell_m ** 2
+    attr = surf.attr[jj, ii]
+    if attr.ndim == 1:
+        kk = per_kpa_per_mm / np.maximum(attr, 1e-12)
+    else:
+        kk = per_kpa_per_mm / np.maximum(attr[:, 0], 1e-12)
+        layer_m = attr[:, 1] * 1e-3
+        soft = layer_m > 0.0
+        jj, ii = np.r_[jj, jj[soft]], np.r_[ii, ii[soft]]
+        z = np.r_[z + layer_m, z[soft]]  # the deep bed starts layer_m into the body
+        kk = np.r_[kk, np.full(int(soft.sum()), per_kpa_per_mm * soft_kpa_per_mm)]
     ref = target_cop if target_cop is not None else np.array([xs.mean(), ys.mean()])
     dx, dy = xs[ii] - ref[0], ys[jj] - ref[1]
     h = solve_height(z, kk, target_f, n)

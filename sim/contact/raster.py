@@ -19,7 +19,7 @@ import numpy as np
 @dataclass
 class LowestSurface:
     z_m: np.ndarray  # (ny, nx) lowest surface height, +inf where nothing was drawn
-    attr: np.ndarray  # (ny, nx) the per-vertex attribute at that surface (0 where none)
+    attr: np.ndarray  # (ny, nx) or (ny, nx, C): the per-vertex attribute(s) at that surface (0 where none)
     origin: tuple[int, int]  # lattice index (j0, i0) of z_m[0, 0]
     cell_m: float
     samples: int  # cell centres tested (cost measure)
@@ -74,11 +74,14 @@ def lowest_surface(vertices, faces, attr, z_max: float, cell_m: float, faces_t=N
     a2, b2 = -c * uy * inv, c * ux * inv
     c2 = (h * ux - h * uy - ux * ay + uy * ax) * inv
     attr = np.asarray(attr, dtype=np.float64)
+    columns = attr.shape[1:]  # () one attribute per vertex, (C,) several
+    attr = attr.reshape(len(attr), -1)
     z0, dz1, dz2 = tri[:, 0, 2], tri[:, 1, 2] - tri[:, 0, 2], tri[:, 2, 2] - tri[:, 0, 2]
-    at = attr[f]
+    at = attr[f]  # (F, 3, C)
     t0, dt1, dt2 = at[:, 0], at[:, 1] - at[:, 0], at[:, 2] - at[:, 0]
     az, bz, cz = a1 * dz1 + a2 * dz2, b1 * dz1 + b2 * dz2, z0 + c1 * dz1 + c2 * dz2
-    aa, ba, ca = a1 * dt1 + a2 * dt2, b1 * dt1 + b2 * dt2, t0 + c1 * dt1 + c2 * dt2
+    a1c, a2c, b1c, b2c, c1c, c2c = (x[:, None] for x in (a1, a2, b1, b2, c1, c2))
+    aa, ba, ca = a1c * dt1 + a2c * dt2, b1c * dt1 + b2c * dt2, t0 + c1c * dt1 + c2c * dt2
     total = int(cnt.sum())
     tid = np.repeat(np.arange(cnt.size), cnt)
     k = np.arange(total) - np.repeat(np.cumsum(cnt) - cnt, cnt)
@@ -92,13 +95,13 @@ def lowest_surface(vertices, faces, attr, z_max: float, cell_m: float, faces_t=N
     sel = np.flatnonzero((l1 >= eps) & (l2 >= eps) & (l1 + l2 <= 1.0 - eps))
     tid, ix, iy, fx, fy = tid[sel], ix[sel], iy[sel], fx[sel], fy[sel]
     z = np.take(az, tid) * fx + np.take(bz, tid) * fy + np.take(cz, tid)
-    a = np.take(aa, tid) * fx + np.take(ba, tid) * fy + np.take(ca, tid)
+    a = aa[tid] * fx[:, None] + ba[tid] * fy[:, None] + ca[tid]
     i0, j0 = int(ix.min()), int(iy.min())
     shape = (int(iy.max()) - j0 + 1, int(ix.max()) - i0 + 1)
     flat = (iy - j0) * shape[1] + (ix - i0)
     zbuf = np.full(shape[0] * shape[1], np.inf)
     np.minimum.at(zbuf, flat, z)
     win = z <= zbuf[flat]
-    abuf = np.zeros_like(zbuf)
+    abuf = np.zeros((zbuf.size, a.shape[1]))
     abuf[flat[win]] = a[win]
-    return LowestSurface(zbuf.reshape(shape), abuf.reshape(shape), (j0, i0), cell_m, total)
+    return LowestSurface(zbuf.reshape(shape), abuf.reshape(shape + columns), (j0, i0), cell_m, total)

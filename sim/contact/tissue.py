@@ -10,7 +10,11 @@ vertex weights that fade smoothly (the lite mesh has 3–5 cm edges):
 - the ischial tuberosities (the sitting bones: ~39 mm of tissue under them, the rest of
   the buttock thick and soft), the sacrum and the scapulae (bony prominences that carry
   the supine body);
-- everything else keeps its part's value.
+- everything else keeps its part's value;
+- a soft layer over all that where the flesh is thick (``SOFT_LAYER_MM``: back, shoulders,
+  shanks, a little on the buttocks; thinner over the bones; none on soles and palms): a
+  bed of ``SOFT_KPA_PER_MM`` on the skin in parallel with the deep bed, which starts that
+  many mm into the body (``Tissue``; docs/sim-contact.md).
 
 Stiffness is kPa per mm of indentation of tissue and rug in series (Winkler layer); the
 contact model interpolates its inverse (compliance) across a triangle, so a soft vertex
@@ -20,6 +24,8 @@ published ranges (see docs/sim-contact.md and ``cavatar sim audit``).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,7 +44,26 @@ PROMINENCES = {
     "sacrum": (("pelvis", (0.0, 0.03, -0.11)), None, 0.045, 1.6),
     "scapula": (("spine3", (0.09, 0.03, -0.06)), ("spine3", (-0.09, 0.03, -0.06)), 0.05, 1.6),
 }
+# The soft layer: the skin side of the flesh gives far more than what lies deeper (it flattens
+# under a sitting or lying body), then the deep bed (the stiffnesses above) takes over.
+SOFT_KPA_PER_MM = 0.15
+SOFT_LAYER_MM = {"pelvis": 8.0, "spine1": 30.0, "spine2": 30.0, "spine3": 30.0,
+                 "left_knee": 25.0, "right_knee": 25.0, "left_collar": 30.0, "right_collar": 30.0,
+                 "left_shoulder": 30.0, "right_shoulder": 30.0, "neck": 25.0, "head": 10.0}  # mm, skinning-weighted
+PROMINENCE_LAYER_MM = {"ischial_tuberosity": 10.0, "sacrum": 8.0, "scapula": 20.0}  # thinner over bone
+HAND_JOINTS = ("left_wrist", "right_wrist", "left_hand", "right_hand")
 BUTTOCK_KPA_PER_MM = 0.5  # gluteal soft tissue away from the bones (was 0.2: the floor-sitting body sank 63 mm)
+
+
+@dataclass(frozen=True)
+class Tissue:
+    """Per-vertex tissue for ``ContactModel.pressure_kpa``: a deep bed of ``kpa_per_mm`` that
+    starts ``soft_layer_mm`` into the body, under a soft bed of ``soft_kpa_per_mm`` on the skin
+    where that layer is thicker than 0 (two Winkler beds in parallel)."""
+
+    kpa_per_mm: np.ndarray  # (V,)
+    soft_layer_mm: np.ndarray  # (V,) 0: no soft layer
+    soft_kpa_per_mm: float = SOFT_KPA_PER_MM
 
 
 def _joints(model) -> np.ndarray:
@@ -72,26 +97,48 @@ def foot_fraction(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return mask, frac, medial
 
 
-def regional_tissue(model, table: dict[str, float] | None = None) -> np.ndarray:
-    """Per-vertex stiffness (V,) kPa/mm with the regions of the module docstring."""
+def regional_tissue(model, table: dict[str, float] | None = None) -> Tissue:
+    """Per-vertex tissue with the regions of the module docstring: the deep bed's stiffness and
+    the soft layer over it."""
+    k = regional_stiffness(model, table)
+    layer = tissue_stiffness(model, {name: SOFT_LAYER_MM.get(name, 0.0) for name in model.joint_names})
+    mask, _, _ = foot_fraction(model)
+    dominant = np.argmax(np.asarray(model.arrays.weights), axis=1)
+    names = list(model.joint_names)
+    hands = np.isin(dominant, [names.index(n) for n in HAND_JOINTS])
+    layer = np.maximum(layer, 0.0)  # (skinning weights may dip a hair below 0)
+    layer[mask | hands] = 0.0  # soles and palms: the stiffnesses above alone
+    for spec, w in _prominence_weights(model):
+        layer = layer + w * (PROMINENCE_LAYER_MM[spec] - layer) * (layer > PROMINENCE_LAYER_MM[spec])
+    return Tissue(k, layer)
+
+
+def regional_stiffness(model, table: dict[str, float] | None = None) -> np.ndarray:
+    """Per-vertex stiffness (V,) kPa/mm of the deep bed, with the regions of the module docstring."""
     base_table = dict(TISSUE_KPA_PER_MM if table is None else table)
     for name in ("pelvis",):
         base_table[name] = BUTTOCK_KPA_PER_MM
     k = tissue_stiffness(model, base_table)
-    v = np.asarray(model.arrays.v_template, np.float64)
-    names = list(model.joint_names)
-    j = _joints(model)
     mask, frac, medial = foot_fraction(model)
     for lo, hi, k_med, k_lat in FOOT_ZONES:
         zone = mask & (frac >= lo) & (frac < hi)
         k[zone] = np.where(medial[zone], k_med, k_lat)
-    for first, second, radius, stiff in PROMINENCES.values():
+    for name, w in _prominence_weights(model):
+        w[mask] = 0.0
+        k = k + w * np.maximum(PROMINENCES[name][3] - k, 0.0)  # prominences only ever stiffen
+    return k
+
+
+def _prominence_weights(model):
+    """(name, (V,) weight) of each bony prominence: Gaussian around its centre(s)."""
+    v = np.asarray(model.arrays.v_template, np.float64)
+    names = list(model.joint_names)
+    j = _joints(model)
+    for name, (first, second, radius, _) in PROMINENCES.items():
         w = np.zeros(len(v))
         for spec in (first, second):
             if spec is None:
                 continue
             centre = j[names.index(spec[0])] + np.asarray(spec[1])
             w = np.maximum(w, np.exp(-0.5 * np.sum((v - centre) ** 2, 1) / radius ** 2))
-        w[mask] = 0.0
-        k = k + w * np.maximum(stiff - k, 0.0)  # prominences only ever stiffen
-    return k
+        yield name, w

@@ -138,3 +138,32 @@ def test_sphere_into_foam_force_cop_and_hertz_like_growth(exponent):
     # Winkler foundation under a sphere: F ∝ d^(n+1), so 4× force → d × 4^(1/(n+1))
     ratio = heavy.indentation_mm / light.indentation_mm
     assert ratio == pytest.approx(4.0 ** (1.0 / (exponent + 1.0)), rel=0.05)
+
+
+@pytest.mark.parametrize("mass_kg, depth_mm", [
+    (5.0, 5 * 9.81 / 0.08 / 1000 / 0.5),  # light: the soft bed alone (d below the 5 mm layer)
+    (50.0, (50 * 9.81 / 0.08 / 1000 + 3.0 * 5.0) / 3.5),  # heavy: 0.5·d + 3·(d − 5) = p
+])
+def test_a_soft_layer_is_a_soft_bed_on_the_skin_over_the_deep_one(mass_kg, depth_mm):
+    from sim.contact import Tissue
+    cm = ContactModel(64, 64, 0.02, cell_mm=5.0, rug_sigma_mm=0.0, crossing_frac=1.0, rug_kpa_per_mm=1e9)
+    v, f = _box((0.4, 0.4, 0.0), (0.8, 0.6, 0.3))
+    tissue = Tissue(np.full(len(v), 3.0), np.full(len(v), 5.0), soft_kpa_per_mm=0.5)
+    res = cm.pressure_kpa(v, f, mass_kg, static=False, tissue_kpa_per_mm=tissue, keep_fine=True)
+    assert res.indentation_mm == pytest.approx(depth_mm, rel=1e-6)
+    np.testing.assert_allclose(res.pressure_kpa[21:29, 21:39], mass_kg * 9.81 / 0.08 / 1000, rtol=1e-6)
+    assert res.contact_area_m2 == pytest.approx(0.08, rel=1e-6)  # a cell with two beds is one cell
+    assert res.force_n == pytest.approx(mass_kg * 9.81, rel=1e-6)
+
+
+def test_a_soft_layer_spreads_a_round_body_wider_and_keeps_its_peak():
+    from sim.contact import Tissue
+    cm = ContactModel(64, 64, 0.02, cell_mm=5.0, rug_sigma_mm=0.0, crossing_frac=1.0)
+    v, f = _sphere(0.15, (0.64, 0.64, 0.15))
+    stiff = cm.pressure_kpa(v, f, 30.0, tissue_kpa_per_mm=2.0)
+    soft = cm.pressure_kpa(v, f, 30.0, tissue_kpa_per_mm=Tissue(np.full(len(v), 2.0), np.full(len(v), 20.0), 0.15))
+    assert soft.force_n == pytest.approx(stiff.force_n, rel=1e-6) and soft.balanced
+    assert soft.contact_area_m2 > 1.5 * stiff.contact_area_m2
+    assert soft.pressure_kpa.max() == pytest.approx(stiff.pressure_kpa.max(), rel=0.1)  # the deep bed under the centre
+    with pytest.raises(ValueError, match="soft layer"):
+        cm.pressure_kpa(v, f, 30.0, tissue_kpa_per_mm=Tissue(np.full(len(v), 2.0), np.full(len(v), -1.0), 0.15))

@@ -47,7 +47,7 @@ def test_force_balance_and_floor_on_every_activity(world, activity):
         assert res.force_total_n == pytest.approx(mass * (9.81 + a[2]), rel=0.02)
         if still:
             static += 1
-            if res.balanced:
+            if res.balanced or res.cop_error_m < 0.005:  # the audit's "reachable": within 5 mm
                 balanced += 1
                 assert np.linalg.norm(res.cop_total_m - com[t, :2]) < 0.015
     print(f"{activity}: {checked} frames checked, {static} still, {balanced} balanced")
