@@ -21,7 +21,8 @@ from where the body then lies: the time since the last stance nearby (within fal
 that stance stood at least min_shift_m away (the load moved by about a body's height: sitting down, or
 a bag dropped or a pet lying down beside a standing person, moves it less) carrying at least
 1/max_load_ratio of the lying load, or if the body crumpled where it stood (down within collapse_window_s,
-at full length from landing on, collapse_min_length_m, and nobody still standing in it) — or if it was
+at full length from landing on, collapse_min_length_m, or as large as collapse_min_area_m2, and nobody still
+standing in it) — or if it was
 someone seated on a chair beside the carpet (a still,
 steady, light print for seated_s, at most 1/seated_load_ratio of the lying load: their weight arriving
 on the floor is a fall wherever it lands). ``fall`` is raised once the episode

@@ -110,9 +110,12 @@ def collapsed(start_t: float, run: Sequence[Reading], landed_length_m: float, b:
     load (at least 1/max_load_ratio of the body ``b`` now lying) at most collapse_s before it (kneeling
     reads light; a deliberate lie-down stays low for longer); the body landed at full length and stayed
     so (``landed_length_m``, its shortest since landing, median-filtered, at least collapse_min_length_m: a
-    push-up gets down onto hands and feet first, then stretches into the plank), and none of its tracks is
+    push-up gets down onto hands and feet first, then stretches into the plank) or lies crumpled over at
+    least collapse_min_area_m2 (trunk, hips and legs down together), and none of its tracks is
     still ``standing`` (the feet of someone beside a dropped bag or a pet lying down)."""
-    if start_t - run[0][0] > c.collapse_window_s or landed_length_m < c.collapse_min_length_m or standing:
+    if start_t - run[0][0] > c.collapse_window_s or standing:
+        return False
+    if landed_length_m < c.collapse_min_length_m and b.area_m2 < c.collapse_min_area_m2:
         return False
     return any(r[0] >= start_t - c.collapse_s and b.force_n <= c.max_load_ratio * r[2] for r in run)
 

@@ -61,6 +61,8 @@ class FallConfig(StrictConfig):
     collapse_min_length_m: float = _f(1.2, "... and landed at full length, pressure length at least this from landing "
                                             "on (sitting, kneeling, getting down for a push-up, or a bag or a pet beside "
                                             "someone's feet, is shorter)")
+    collapse_min_area_m2: float = _f(0.10, "... or landed this large (a body crumpled on its side: trunk, hips and "
+                                          "legs down together)")
     max_load_ratio: float = _f(2.5, "... and carried at least the lying load divided by this (lighter: the body was "
                                     "in the air)")
     seated_s: float = _f(1.5, "a still, light footprint held this long is someone seated on a chair beside the carpet "

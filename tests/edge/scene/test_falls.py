@@ -42,6 +42,19 @@ def test_a_slow_collapse_where_they_stood_is_a_fall():
     assert 0 < ev[0][2] - 4.9 <= 1.0
 
 
+def test_a_collapse_into_a_heap_where_they_stood_is_a_fall():
+    """Crumpled on the side, knees drawn up: 0.75 m long but 0.11 m² at 5.9 kPa (the simulator's slow collapses
+    since the tissue's soft layer: 0.10–0.12 m², 0.6–1.1 m) — no sitting or kneeling print is that large."""
+    a = np.array([0.9, 0.6])
+    heap = dict(force_n=650.0, area_m2=0.11, length_m=0.75)
+    script = [(3.0, [body([1], a, **FEET)]), (1.8, [body([1], a, **KNEEL)]), (0.1, []),
+              (34.0, [body([1, 2], a + (0.1, 0.1), **heap)])]
+    ev, _ = run(script)
+    assert kinds(ev) == [("fall", "raised"), ("person_down", "raised")]
+    ev, _ = run(script, config=replace(FallConfig(), collapse_min_area_m2=0.12))
+    assert ("fall", "raised") not in kinds(ev)
+
+
 def test_a_collapse_measured_short_for_one_frame_while_landing_is_still_a_fall():
     """The scene re-segments the landing body for one frame (1.1 m between 1.7 m and 1.5 m): a posture lasts
     longer than a frame, so the body still landed at full length."""
