@@ -154,8 +154,9 @@ def main(argv: list[str] | None = None) -> int:
     preds = predictions(tracks, args.bundle, pitch, board=args.board)
     before = wrong_share([p for p, _, _ in preds], tracks)
     params, weights, tried = fit(tracks, preds, pitch, names, grid)
+    kept_travel = travel_settings(Path(args.out))
     after = min(r["wrong_90"] for r in tried)
-    result = {"params": params.to_dict(), "activity_weight": weights,
+    result = {"params": {**params.to_dict(), **kept_travel[0]}, "activity_weight": weights, **kept_travel[1],
               "fit": {"bundle": str(args.bundle), "data": str(args.data), "dataset_settings": ds.manifest.get("settings"),
                       "dataset_git_revision": ds.manifest.get("git_revision"), "split": args.split,
                       "input": "board" if args.board else "clean",
@@ -166,6 +167,17 @@ def main(argv: list[str] | None = None) -> int:
     print(f"heading >90° off: model {100 * before:.1f} % → resolved {100 * after:.1f} % of {result['fit']['frames']} "
           f"frames; wrote {args.out}")
     return 0
+
+
+def travel_settings(path: Path) -> tuple[dict, dict]:
+    """The travel vote's parameters and its per-activity table from the file a fit replaces: the fit's
+    tracks carry no centre on the carpet, so it cannot fit them, and a refit must not drop them."""
+    try:
+        old = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}, {}
+    params = {k: v for k, v in old.get("params", {}).items() if k.startswith("travel_")}
+    return params, ({"travel_weight": old["travel_weight"]} if "travel_weight" in old else {})
 
 
 if __name__ == "__main__":

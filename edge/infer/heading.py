@@ -26,6 +26,7 @@ Parameters live in ``heading.json`` beside this file, fitted offline by ``export
 from __future__ import annotations
 
 import json
+from collections import deque
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
@@ -63,6 +64,10 @@ class HeadingParams:
     follow_axis_deg: float = 0.0     # > 0: the evidence turns with the feet's long axis between frames when
                                      # that changes by at most this much (a person turning carries it along;
                                      # a larger jump is a foot landing askew); 0: it only decays toward new votes
+    travel_weight: float = 0.0       # > 0: a track whose centre went at least travel_min_m over the last
+    travel_min_m: float = 0.3        # travel_frames inferred frames adds a vote of this length toward where it
+    travel_frames: float = 14.0      # went (people walk forwards), times the "travel_weight" table's weight of
+                                     # the activity the model sees (sitting down also moves the centre, backwards)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "HeadingParams":
@@ -106,6 +111,20 @@ def load(path: str | Path | None = None, activities: list[str] | None = None) ->
         return params, np.array([float(table.get(a, 0.0)) for a in activities])
     except (TypeError, ValueError, AttributeError) as exc:
         raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
+
+
+def travel_weights(path: str | Path | None = None, activities: list[str] | None = None) -> np.ndarray | None:
+    """The travel vote's weight per activity of a bundle's ``activities`` (in its order) from the fitted
+    JSON's "travel_weight" table (an activity it does not name weighs 0); None without a table or
+    activities. ValueError names a bad file."""
+    p = Path(path) if path is not None else PARAMS_FILE
+    table = json.loads(p.read_text()).get("travel_weight")
+    if table is None or activities is None:
+        return None
+    try:
+        return np.array([float(table.get(a, 0.0)) for a in activities])
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise ValueError(f"{p}: travel_weight must map activity names to numbers ({exc})") from None
 
 
 MAX_COP_STEP_M = 0.4  # a track's centre moving farther between two inferred frames is not one body moving
@@ -259,15 +278,18 @@ class HeadingResolver:
     ``confirm_flip_frames`` = N, that half turn until the model has held the other for N frames.
     """
 
-    def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None) -> None:
+    def __init__(self, params: HeadingParams | None = None, activity_weight: np.ndarray | None = None,
+                 travel_weight: np.ndarray | None = None) -> None:
         self.params = params or HeadingParams()
         self.activity_weight = None if activity_weight is None else np.asarray(activity_weight, np.float64)
+        self.travel_weight = None if travel_weight is None else np.asarray(travel_weight, np.float64)
         self.evidence = np.zeros(2)
         self.last_yaw: float | None = None
         self.flips = 0  # frames published turned
         self.pending = 0  # frames the model has stood a half turn from the published yaw (confirm_flip_frames)
         self.last_axis_rad = float("nan")  # the feet's axis when last seen (follow_axis)
         self.last_cop_m: np.ndarray | None = None  # the track's centre when last resolved
+        self.path: deque[np.ndarray] = deque(maxlen=max(2, int(self.params.travel_frames) + 1))  # its recent centres
         self.resets = 0  # times the evidence was dropped because the track's centre jumped
 
     def reset(self) -> None:
@@ -275,6 +297,7 @@ class HeadingResolver:
         body put down elsewhere): the next frames decide afresh."""
         self.evidence = np.zeros(2)
         self.last_yaw, self.pending, self.last_axis_rad = None, 0, float("nan")
+        self.path.clear()
 
     def resolve(self, pose_aa: np.ndarray, person_kpa: np.ndarray, pitch_m: float,
                 activity_probs: np.ndarray | None = None, cop_m: np.ndarray | None = None) -> np.ndarray:
@@ -290,13 +313,27 @@ class HeadingResolver:
                 self.reset()
                 self.resets += 1
             self.last_cop_m = cop
+            self.path.append(cop)
         cue, on_feet, axis_rad = frame_evidence(person_kpa, pitch_m, self.params)
-        return self.decide(pose_aa, cue, activity_probs, on_feet, axis_rad)
+        return self.decide(pose_aa, cue, activity_probs, on_feet, axis_rad, self._travel_vote(activity_probs))
+
+    def _travel_vote(self, activity_probs: np.ndarray | None) -> np.ndarray:
+        """(2,) toward where the track's centre went over the last travel_frames frames when it went at least
+        travel_min_m, of length travel_weight times the activity's travel weight (walking: the body faces its
+        way); zeros otherwise, and without activity probabilities or a travel table."""
+        p = self.params
+        if (p.travel_weight <= 0 or self.travel_weight is None or activity_probs is None
+                or len(self.path) < (self.path.maxlen or 0)):
+            return np.zeros(2)
+        d = self.path[-1] - self.path[0]
+        dist = float(np.hypot(d[0], d[1]))
+        w = p.travel_weight * float(np.asarray(activity_probs, np.float64) @ self.travel_weight)
+        return d * (w / dist) if dist >= p.travel_min_m and w > 0 else np.zeros(2)
 
     def decide(self, pose_aa: np.ndarray, cue: np.ndarray, activity_probs: np.ndarray | None = None,
-               on_feet: bool = True, axis_rad: float = float("nan")) -> np.ndarray:
+               on_feet: bool = True, axis_rad: float = float("nan"), travel: np.ndarray | None = None) -> np.ndarray:
         """:meth:`resolve` with the frame's cue (2,), whether the person is on their feet and the feet's
-        axis already computed."""
+        axis already computed; travel (2,): the travel vote (already weighted by activity)."""
         p = self.params
         weight = 1.0
         if self.activity_weight is not None and activity_probs is not None:
@@ -304,6 +341,8 @@ class HeadingResolver:
         if p.follow_axis_deg > 0:
             self._follow_axis(axis_rad, np.radians(p.follow_axis_deg))
         e = self.evidence * (p.decay if on_feet else p.off_feet_decay) + weight * np.asarray(cue, np.float64)
+        if travel is not None:
+            e = e + travel
         length = float(np.hypot(e[0], e[1]))
         if length > p.max_evidence:
             e, length = e * (p.max_evidence / length), p.max_evidence

@@ -69,7 +69,10 @@ class PeopleInference:
         self.adaptive = bool(adaptive)
         self.resolve_heading = bool(resolve_heading)
         self.activities = bundle.activities
-        heading = heading_cue.load(heading_params, self.activities) if self.resolve_heading else None
+        heading = None
+        if self.resolve_heading:  # (params, foot-cue weights, travel weights) per activity, for each track's resolver
+            heading = (*heading_cue.load(heading_params, self.activities),
+                       heading_cue.travel_weights(heading_params, self.activities))
         self.tracks = TrackBook(bundle.window, bundle.features, heading)
         self._pitch_m = float(bundle.pitch_m)
         self._input_limits = input_limits(bundle.manifest)

@@ -39,10 +39,12 @@ class TrackState:
 
 class TrackBook:
     """track_id → TrackState; opens and frees feature windows (and heading resolvers, given ``heading``:
-    the parameters and per-activity cue weights of :func:`edge.infer.heading.load`)."""
+    the parameters and per-activity cue weights of :func:`edge.infer.heading.load`, and optionally the
+    travel weights of :func:`edge.infer.heading.travel_weights`)."""
 
     def __init__(self, window: int, features: int,
-                 heading: tuple[HeadingParams, np.ndarray | None] | None = None) -> None:
+                 heading: tuple[HeadingParams, np.ndarray | None] | tuple[HeadingParams, np.ndarray | None, np.ndarray | None]
+                 | None = None) -> None:
         self.window, self.features = int(window), int(features)
         self.heading = heading
         self.tracks: dict[int, TrackState] = {}

@@ -264,3 +264,39 @@ def test_a_track_whose_centre_jumps_starts_its_heading_afresh():
         stay.resolve(upright(cue_yaw_rad(np.array([1.0, 0.0]))), feet_facing(0.0), PITCH, cop_m=(0.9, 0.9))
     out = stay.resolve(upright(truth), feet_facing(np.pi, (0.9, 1.6)), PITCH, cop_m=(0.9, 1.0))
     assert abs((yaw_rad(out[:3]) - truth + np.pi) % (2 * np.pi) - np.pi) > np.pi / 2
+
+
+def test_a_walker_faces_the_way_they_go_and_sitting_down_is_no_walk():
+    """The feet say nothing (a walking foot rolls heel to toe) and the model faces backwards: a track that went
+    0.7 m along +x in the last second, seen walking, is published facing +x. Sitting down moves the centre
+    0.4 m backwards too; seen sitting, it turns nothing."""
+    params = HeadingParams(decay=0.97, max_evidence=30.0, min_evidence=0.5, travel_weight=1.0)
+    walking, sitting = np.array([0.0, 1.0]), np.array([1.0, 0.0])  # activity probabilities over (sitting, walking)
+    ahead = cue_yaw_rad(np.array([1.0, 0.0]))
+
+    def run(probs, travel_table, centre):
+        r = HeadingResolver(params, None, travel_table)
+        for k in range(30):
+            out = r.resolve(upright(ahead + np.pi), np.zeros((96, 96)), PITCH, probs, cop_m=centre(k))
+        return r, abs((yaw_rad(out[:3]) - ahead + np.pi) % (2 * np.pi) - np.pi)
+
+    def walk(k):  # 0.7 m/s at 14 Hz, swaying 5 cm side to side with the steps
+        return (0.3 + 0.05 * k, 0.9 + 0.05 * (k % 2))
+
+    table = np.array([0.0, 1.0])  # the travel vote's weight: walking only
+    assert run(walking, table, walk)[1] < 0.1
+    assert run(walking, None, walk)[1] > np.pi / 2  # no travel table: the model's answer stands
+    assert run(sitting, table, walk)[1] > np.pi / 2
+    r, _ = run(sitting, table, lambda k: (0.9 + 0.4 * min(max(k - 10, 0), 7) / 7, 0.9))
+    assert r.flips == 0
+
+
+def test_the_packaged_travel_vote_is_for_walkers_and_a_refit_keeps_it(tmp_path):
+    from edge.infer.heading import travel_weights
+    from export.heading_cue import travel_settings
+    w = travel_weights(None, ["sitting", "walking", "standing"])
+    assert w is not None and w[1] > 0 and w[0] == 0 and w[2] == 0  # sitting down moves the centre too
+    assert heading.HeadingParams.load().travel_weight > 0
+    params, table = travel_settings(heading.PARAMS_FILE)  # what `make heading` carries over to its refit
+    assert params["travel_weight"] > 0 and table["travel_weight"]["walking"] > 0
+    assert travel_settings(tmp_path / "none.json") == ({}, {})
