@@ -101,30 +101,28 @@ def load(path: str | Path | None = None, activities: list[str] | None = None) ->
     from a fitted JSON (the packaged heading.json by default); an activity the file does not name
     weighs 0 (the cue is not trusted there). ValueError names a bad file."""
     p = Path(path) if path is not None else PARAMS_FILE
-    params = HeadingParams.load(p)
-    if activities is None:
-        return params, None
-    table = json.loads(p.read_text()).get("activity_weight")
-    if table is None:
-        return params, None
-    try:
-        return params, np.array([float(table.get(a, 0.0)) for a in activities])
-    except (TypeError, ValueError, AttributeError) as exc:
-        raise ValueError(f"{p}: activity_weight must map activity names to numbers ({exc})") from None
+    return HeadingParams.load(p), _activity_table(p, "activity_weight", activities)
 
 
 def travel_weights(path: str | Path | None = None, activities: list[str] | None = None) -> np.ndarray | None:
     """The travel vote's weight per activity of a bundle's ``activities`` (in its order) from the fitted
     JSON's "travel_weight" table (an activity it does not name weighs 0); None without a table or
     activities. ValueError names a bad file."""
-    p = Path(path) if path is not None else PARAMS_FILE
-    table = json.loads(p.read_text()).get("travel_weight")
-    if table is None or activities is None:
+    return _activity_table(Path(path) if path is not None else PARAMS_FILE, "travel_weight", activities)
+
+
+def _activity_table(p: Path, key: str, activities: list[str] | None) -> np.ndarray | None:
+    """The JSON file's table ``key`` (activity name → number) as an array over ``activities``, 0 for a name it
+    lacks; None without the table or the activities."""
+    if activities is None:
+        return None
+    table = json.loads(p.read_text()).get(key)
+    if table is None:
         return None
     try:
         return np.array([float(table.get(a, 0.0)) for a in activities])
     except (TypeError, ValueError, AttributeError) as exc:
-        raise ValueError(f"{p}: travel_weight must map activity names to numbers ({exc})") from None
+        raise ValueError(f"{p}: {key} must map activity names to numbers ({exc})") from None
 
 
 MAX_COP_STEP_M = 0.4  # a track's centre moving farther between two inferred frames is not one body moving

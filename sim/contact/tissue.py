@@ -100,33 +100,39 @@ def foot_fraction(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def regional_tissue(model, table: dict[str, float] | None = None) -> Tissue:
     """Per-vertex tissue with the regions of the module docstring: the deep bed's stiffness and
     the soft layer over it."""
-    k = regional_stiffness(model, table)
-    layer = tissue_stiffness(model, {name: SOFT_LAYER_MM.get(name, 0.0) for name in model.joint_names})
-    mask, _, _ = foot_fraction(model)
-    dominant = np.argmax(np.asarray(model.arrays.weights), axis=1)
-    names = list(model.joint_names)
-    hands = np.isin(dominant, [names.index(n) for n in HAND_JOINTS])
-    layer = np.maximum(layer, 0.0)  # (skinning weights may dip a hair below 0)
-    layer[mask | hands] = 0.0  # soles and palms: the stiffnesses above alone
-    for spec, w in _prominence_weights(model):
-        layer = layer + w * (PROMINENCE_LAYER_MM[spec] - layer) * (layer > PROMINENCE_LAYER_MM[spec])
-    return Tissue(k, layer)
+    foot = foot_fraction(model)
+    prominence = dict(_prominence_weights(model))
+    return Tissue(_deep_stiffness(model, table, foot, prominence), _soft_layer(model, foot[0], prominence))
 
 
-def regional_stiffness(model, table: dict[str, float] | None = None) -> np.ndarray:
-    """Per-vertex stiffness (V,) kPa/mm of the deep bed, with the regions of the module docstring."""
+def _deep_stiffness(model, table: dict[str, float] | None, foot, prominence: dict[str, np.ndarray]) -> np.ndarray:
+    """Per-vertex stiffness (V,) kPa/mm of the deep bed: the per-part blend, the foot zones (``foot``:
+    ``foot_fraction``), the prominences (their weights) stiffening what lies under them."""
     base_table = dict(TISSUE_KPA_PER_MM if table is None else table)
-    for name in ("pelvis",):
-        base_table[name] = BUTTOCK_KPA_PER_MM
+    base_table["pelvis"] = BUTTOCK_KPA_PER_MM
     k = tissue_stiffness(model, base_table)
-    mask, frac, medial = foot_fraction(model)
+    mask, frac, medial = foot
     for lo, hi, k_med, k_lat in FOOT_ZONES:
         zone = mask & (frac >= lo) & (frac < hi)
         k[zone] = np.where(medial[zone], k_med, k_lat)
-    for name, w in _prominence_weights(model):
-        w[mask] = 0.0
-        k = k + w * np.maximum(PROMINENCES[name][3] - k, 0.0)  # prominences only ever stiffen
+    for name, w in prominence.items():
+        k = k + np.where(mask, 0.0, w) * np.maximum(PROMINENCES[name][3] - k, 0.0)  # prominences only ever stiffen
     return k
+
+
+def _soft_layer(model, foot_mask: np.ndarray, prominence: dict[str, np.ndarray]) -> np.ndarray:
+    """Per-vertex soft-layer thickness (V,) mm: ``SOFT_LAYER_MM`` blended by the skinning weights (the same
+    blend as the stiffness), none on soles and palms, thinned to ``PROMINENCE_LAYER_MM`` over the bones."""
+    layer = tissue_stiffness(model, {name: SOFT_LAYER_MM.get(name, 0.0) for name in model.joint_names})
+    names = list(model.joint_names)
+    dominant = np.argmax(np.asarray(model.arrays.weights), axis=1)
+    hands = np.isin(dominant, [names.index(n) for n in HAND_JOINTS])
+    layer = np.maximum(layer, 0.0)  # (skinning weights may dip a hair below 0)
+    layer[foot_mask | hands] = 0.0
+    for name, w in prominence.items():
+        thin = PROMINENCE_LAYER_MM[name]
+        layer = layer + w * (thin - layer) * (layer > thin)
+    return layer
 
 
 def _prominence_weights(model):

@@ -14,7 +14,7 @@ import numpy as np
 from edge.body.rotations import euler_xyz_deg_to_matrix
 from sim.motion.activities import FEET, HEEL_OFF_DEG, STANDING, mirror, styled, uniform
 from sim.motion.keys import BASE, Timeline, contacts, pose
-from sim.motion.rig import LF, LOCK_JOINT, RF, UPRIGHT, J, Rig
+from sim.motion.rig import LF, LOCK_JOINT, RF, UPRIGHT, J, Rig, rot_z
 
 
 def walking(style, rng, seconds, label, rig: Rig, home_radius_m: float, heading0: float, line: bool = False) -> Timeline:
@@ -117,8 +117,7 @@ def _balls_xy(rig: Rig, p: np.ndarray) -> np.ndarray:
 
 def _turned(xy: np.ndarray, heading: float) -> np.ndarray:
     """Points (…,2) of a body facing −y, turned to ``heading`` (rad, about +z)."""
-    c, s = np.cos(heading), np.sin(heading)
-    return xy @ np.array([[c, s], [-s, c]])
+    return xy @ rot_z(heading)[:2, :2].T
 
 
 def _land(rig: Rig, p: np.ndarray, ball_w: np.ndarray, stance: int, swing: int, heading: float):
